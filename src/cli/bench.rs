@@ -1,0 +1,44 @@
+//! Scaling benchmark: µs per RK4 step (with correction) for towers of growing height.
+
+use std::time::Instant;
+
+use tensegrity_fmu::scene::tower_scene;
+use tensegrity_fmu::{Model, Simulation};
+
+/// Prints one row per tower height and the ratio of µs per bar-step to the smallest tower's.
+pub fn scaling(stages: &[usize], seconds: f64) -> Result<(), String> {
+    println!("| stages | bars | build (ms) | µs/step | µs/(step·bar) | ratio to linear |");
+    println!("|---:|---:|---:|---:|---:|---:|");
+    let mut base: Option<f64> = None;
+    for &k in stages {
+        let mut scene = tower_scene(k, Some(500.0), &format!("tower{k}"));
+        // Explicit rest lengths: the dense prestress solve is not what is measured here.
+        scene.prestress = None;
+        for c in &mut scene.cables {
+            let [a, b] = c.nodes;
+            let d: f64 = (0..3)
+                .map(|i| (scene.nodes[b - 1][i] - scene.nodes[a - 1][i]).powi(2))
+                .sum::<f64>()
+                .sqrt();
+            c.rest_length = Some(0.98 * d);
+        }
+        let started = Instant::now();
+        let model = Model::new(&scene).map_err(|e| e.to_string())?;
+        let build_ms = started.elapsed().as_secs_f64() * 1e3;
+        let bars = model.bars.len();
+        let h = model.solver.step_size;
+        let mut sim = Simulation::new(model);
+        sim.advance(10, h).map_err(|e| e.to_string())?;
+        let started = Instant::now();
+        let mut steps = 0u64;
+        while started.elapsed().as_secs_f64() < seconds || steps < 20 {
+            sim.advance(10, h).map_err(|e| e.to_string())?;
+            steps += 10;
+        }
+        let us = started.elapsed().as_secs_f64() * 1e6 / steps as f64;
+        let per_bar = us / bars as f64;
+        let ratio = per_bar / *base.get_or_insert(per_bar);
+        println!("| {k} | {bars} | {build_ms:.1} | {us:.1} | {per_bar:.3} | {ratio:.2} |");
+    }
+    Ok(())
+}

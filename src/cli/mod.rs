@@ -1,0 +1,143 @@
+//! Command-line front end. Each subcommand is a thin layer over the library.
+
+mod bench;
+
+use std::fs::File;
+use std::io::{BufWriter, Write};
+use std::path::PathBuf;
+
+use clap::{Parser, Subcommand};
+
+use tensegrity_fmu::outputs;
+use tensegrity_fmu::scene::{self, Scene, BUILTIN_DEFAULT};
+use tensegrity_fmu::{Model, Simulation};
+
+/// Tensegrity dynamics (Cheong, Skelton & Cho 2014) as FMI 2.0 co-simulation FMUs.
+#[derive(Parser, Debug)]
+#[command(version, about)]
+pub struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand, Debug)]
+enum Command {
+    /// Run a scene and write a CSV whose columns are the FMU output names.
+    Simulate {
+        /// Scene file (.toml or .json) or built-in name; default: prism2.
+        scene: Option<String>,
+        /// Simulated time in s.
+        #[arg(long, default_value_t = 1.0)]
+        time: f64,
+        /// Internal step in s (default: the scene's solver.step_size).
+        #[arg(long)]
+        step_size: Option<f64>,
+        /// Write a row every this many seconds (default: every step).
+        #[arg(long)]
+        interval: Option<f64>,
+        /// Turn the constraint correction off.
+        #[arg(long)]
+        no_correction: bool,
+        /// CSV file (default: <scene name>.csv).
+        #[arg(short, long)]
+        output: Option<PathBuf>,
+    },
+    /// Print a built-in scene as TOML (or list them with no name).
+    Scene {
+        /// Built-in name.
+        name: Option<String>,
+    },
+    /// Print µs per step for towers of growing height, with the ratio to linear scaling.
+    Bench {
+        /// Tower heights in stages.
+        #[arg(long, value_delimiter = ',', default_value = "2,20,200,2000")]
+        stages: Vec<usize>,
+        /// Minimum wall time per measurement, s.
+        #[arg(long, default_value_t = 1.0)]
+        seconds: f64,
+    },
+}
+
+/// Runs one command; errors come back as messages.
+pub fn run(cli: Cli) -> Result<(), String> {
+    match cli.command {
+        Command::Simulate {
+            scene,
+            time,
+            step_size,
+            interval,
+            no_correction,
+            output,
+        } => simulate(
+            scene.as_deref().unwrap_or(BUILTIN_DEFAULT),
+            time,
+            step_size,
+            interval,
+            no_correction,
+            output,
+        ),
+        Command::Scene { name: None } => {
+            for n in scene::builtin_names() {
+                println!("{n}");
+            }
+            Ok(())
+        }
+        Command::Scene { name: Some(name) } => {
+            let s = scene::generate(&name).ok_or_else(|| {
+                format!(
+                    "unknown built-in scene '{name}'; known: {}",
+                    scene::builtin_names().join(", ")
+                )
+            })?;
+            print!("{}", s.to_toml_string());
+            Ok(())
+        }
+        Command::Bench { stages, seconds } => bench::scaling(&stages, seconds),
+    }
+}
+
+fn simulate(
+    scene_arg: &str,
+    time: f64,
+    step_size: Option<f64>,
+    interval: Option<f64>,
+    no_correction: bool,
+    output: Option<PathBuf>,
+) -> Result<(), String> {
+    let scene = Scene::from_name_or_file(scene_arg).map_err(|e| e.to_string())?;
+    let model = Model::new(&scene).map_err(|e| e.to_string())?;
+    let h = step_size.unwrap_or(model.solver.step_size);
+    if !(h > 0.0 && h.is_finite() && time >= 0.0 && time.is_finite()) {
+        return Err(format!(
+            "--step-size and --time must be positive and finite (got {h}, {time})"
+        ));
+    }
+    let mut sim = Simulation::new(model);
+    sim.correction &= !no_correction;
+    for w in sim.warnings() {
+        eprintln!("warning: {w}");
+    }
+    let path = output.unwrap_or_else(|| PathBuf::from(format!("{}.csv", scene.name)));
+    let file = File::create(&path).map_err(|e| format!("cannot create {}: {e}", path.display()))?;
+    let mut w = BufWriter::new(file);
+    let table = outputs::outputs(&sim);
+    let io = |e: std::io::Error| format!("writing {}: {e}", path.display());
+    outputs::write_header(&mut w, &table).map_err(io)?;
+    outputs::write_row(&mut w, &table, &sim).map_err(io)?;
+    let steps = (time / h).round() as u64;
+    let every = interval.map_or(1, |i| ((i / h).round() as u64).max(1));
+    let mut done = 0;
+    while done < steps {
+        let n = every.min(steps - done);
+        for k in done..done + n {
+            sim.step_to(k as f64 * h, (k + 1) as f64 * h)
+                .map_err(|e| e.to_string())?;
+        }
+        sim.refresh();
+        outputs::write_row(&mut w, &table, &sim).map_err(io)?;
+        done += n;
+    }
+    w.flush().map_err(io)?;
+    println!("{}", path.display());
+    Ok(())
+}

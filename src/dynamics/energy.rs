@@ -1,0 +1,95 @@
+//! Reported quantities that depend only on kinematics: energy, momentum and the
+//! constraint residuals. Call [`super::kinematics`] (or an evaluation) first.
+
+use nalgebra::Vector3;
+
+use super::{cable_force_density, Inputs, Workspace};
+use crate::model::{CableLaw, Model};
+
+/// Kinetic energy `½ tr(Ṅ M Ṅᵀ)`, J. Per bar: `(m/6)(|v_a|² + v_a·v_b + |v_b|²)`.
+pub fn kinetic(model: &Model, ws: &Workspace) -> f64 {
+    model
+        .bars
+        .iter()
+        .enumerate()
+        .map(|(i, bar)| {
+            let (va, vb) = (ws.end_vel[2 * i], ws.end_vel[2 * i + 1]);
+            bar.mass / 6.0 * (va.norm_squared() + va.dot(&vb) + vb.norm_squared())
+        })
+        .sum()
+}
+
+/// Cable strain energy plus gravity potential, J. A controlled cable at constant γ
+/// stores `½ γ |s|²`.
+pub fn potential(model: &Model, inputs: &Inputs, ws: &Workspace) -> f64 {
+    let mut v = 0.0;
+    for cable in &model.cables {
+        let s = ws.node_pos[cable.nodes[1]] - ws.node_pos[cable.nodes[0]];
+        v += match cable.law {
+            CableLaw::Elastic {
+                stiffness,
+                rest_length,
+                ..
+            } => 0.5 * stiffness * (s.norm() - rest_length).max(0.0).powi(2),
+            CableLaw::Controlled { .. } => {
+                0.5 * cable_force_density(&cable.law, inputs, &s, &Vector3::zeros())
+                    * s.norm_squared()
+            }
+        };
+    }
+    if let Some(g) = model.gravity {
+        for (i, bar) in model.bars.iter().enumerate() {
+            let centre = (ws.end_pos[2 * i] + ws.end_pos[2 * i + 1]) / 2.0;
+            v -= bar.mass * g.dot(&centre);
+        }
+    }
+    v
+}
+
+/// Linear momentum `Σ m ṙ`, kg·m/s.
+pub fn linear_momentum(model: &Model, ws: &Workspace) -> Vector3<f64> {
+    model
+        .bars
+        .iter()
+        .enumerate()
+        .map(|(i, bar)| (ws.end_vel[2 * i] + ws.end_vel[2 * i + 1]) * (bar.mass / 2.0))
+        .sum()
+}
+
+/// Angular momentum about the origin, `Σ m (r × ṙ + b × ḃ / 12)`, kg·m²/s.
+pub fn angular_momentum(model: &Model, ws: &Workspace) -> Vector3<f64> {
+    model
+        .bars
+        .iter()
+        .enumerate()
+        .map(|(i, bar)| {
+            let (a, b) = (2 * i, 2 * i + 1);
+            let r = (ws.end_pos[a] + ws.end_pos[b]) / 2.0;
+            let rd = (ws.end_vel[a] + ws.end_vel[b]) / 2.0;
+            let bv = ws.end_pos[b] - ws.end_pos[a];
+            let bd = ws.end_vel[b] - ws.end_vel[a];
+            (r.cross(&rd) + bv.cross(&bd) / 12.0) * bar.mass
+        })
+        .sum()
+}
+
+/// `max |‖bᵢ‖ − lᵢ|`, m.
+pub fn length_error(model: &Model, ws: &Workspace) -> f64 {
+    model
+        .bars
+        .iter()
+        .enumerate()
+        .map(|(i, bar)| ((ws.end_pos[2 * i + 1] - ws.end_pos[2 * i]).norm() - bar.length).abs())
+        .fold(0.0, f64::max)
+}
+
+/// `max |bᵢ · ḃᵢ|`, m²/s.
+pub fn orthogonality_error(model: &Model, ws: &Workspace) -> f64 {
+    (0..model.bars.len())
+        .map(|i| {
+            let bv = ws.end_pos[2 * i + 1] - ws.end_pos[2 * i];
+            let bd = ws.end_vel[2 * i + 1] - ws.end_vel[2 * i];
+            bv.dot(&bd).abs()
+        })
+        .fold(0.0, f64::max)
+}

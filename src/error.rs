@@ -1,0 +1,63 @@
+//! Error values. Scene errors name the offending key; numerical failures say what broke.
+
+use thiserror::Error;
+
+/// Anything wrong with a scene, found while reading, validating or building it.
+#[derive(Debug, Error, Clone, PartialEq)]
+pub enum SceneError {
+    /// The file could not be read.
+    #[error("cannot read scene file {path}: {message}")]
+    Io {
+        /// The path that failed.
+        path: String,
+        /// The OS reason.
+        message: String,
+    },
+    /// The text is not a valid scene document.
+    #[error("malformed {format} scene: {message}")]
+    Parse {
+        /// `TOML` or `JSON`.
+        format: &'static str,
+        /// The parser's message (it names the key and line).
+        message: String,
+    },
+    /// A key holds an invalid value.
+    #[error("{key}: {reason}")]
+    Invalid {
+        /// The scene key, with 1-based list indices, e.g. `bars[2].mass`.
+        key: String,
+        /// Why it is rejected.
+        reason: String,
+    },
+}
+
+impl SceneError {
+    /// Shorthand for [`SceneError::Invalid`].
+    pub fn invalid(key: impl Into<String>, reason: impl Into<String>) -> Self {
+        Self::Invalid {
+            key: key.into(),
+            reason: reason.into(),
+        }
+    }
+}
+
+/// A failure while integrating: the state was left at the last good point.
+#[derive(Debug, Error, Clone, PartialEq)]
+pub enum StepError {
+    /// A NaN or an infinity reached the state.
+    #[error("non-finite state at t = {time} s ({what}); the state was kept at the last good point. Reduce the step size or check the inputs")]
+    NonFinite {
+        /// Time at the start of the failed step.
+        time: f64,
+        /// Which quantity became non-finite.
+        what: String,
+    },
+    /// An input holds a NaN or an infinity.
+    #[error("input {name} is not finite ({value})")]
+    NonFiniteInput {
+        /// The input's variable name.
+        name: String,
+        /// The offending value.
+        value: f64,
+    },
+}

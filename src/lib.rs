@@ -1,0 +1,21 @@
+//! Tensegrity dynamics in non-minimal coordinates with the exact recursive constraint
+//! correction of Cheong, Skelton & Cho (2014).
+//!
+//! Layers: [`scene`] (files) → [`model`] (constants, built once) → [`dynamics`]
+//! (the equations of motion) → [`integrator`] + [`correction`] → [`sim`] (a running
+//! simulation) → [`outputs`] (named quantities shared by CSV and FMU).
+#![warn(missing_docs)]
+
+pub mod correction;
+pub mod dynamics;
+pub mod error;
+pub mod integrator;
+pub mod model;
+pub mod outputs;
+pub mod scene;
+pub mod sim;
+
+pub use error::{SceneError, StepError};
+pub use model::Model;
+pub use scene::Scene;
+pub use sim::Simulation;

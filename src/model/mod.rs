@@ -1,0 +1,247 @@
+//! The immutable model built once from a validated scene: topology, masses, laws,
+//! the constraint basis, the correction plan and the reaction-system layout.
+
+pub mod coords;
+pub mod prestress;
+
+use nalgebra::Vector3;
+
+use crate::correction::CorrectionPlan;
+use crate::dynamics::reactions::Reactions;
+use crate::error::SceneError;
+use crate::scene::{CableControl, Scene, SolverSpec};
+pub use coords::BasisKind;
+use coords::Coordinates;
+
+/// A rigid bar between physical nodes (0-based).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Bar {
+    /// Start and end node; `b = x_end − x_start`.
+    pub nodes: [usize; 2],
+    /// Mass in kg.
+    pub mass: f64,
+    /// Length in m (from the start geometry).
+    pub length: f64,
+}
+
+/// How a cable's force density γ (N/m) arises.
+#[derive(Debug, Clone, PartialEq)]
+pub enum CableLaw {
+    /// `γ = κ (1 − s₀/|s|) + c (s·ṡ)/|s|²` while taut, else 0; clamped at ≥ 0.
+    Elastic {
+        /// κ in N/m.
+        stiffness: f64,
+        /// s₀ in m.
+        rest_length: f64,
+        /// c in N·s/m, if the scene gives damping.
+        damping: Option<f64>,
+    },
+    /// γ is input number `input` of [`Inputs::force_density`](crate::dynamics::Inputs).
+    Controlled {
+        /// Index into the controlled-cable inputs.
+        input: usize,
+    },
+}
+
+/// A cable between physical nodes (0-based).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Cable {
+    /// End nodes; `s = x_b − x_a`.
+    pub nodes: [usize; 2],
+    /// Its force law.
+    pub law: CableLaw,
+}
+
+/// Everything constant about a simulation.
+#[derive(Debug, Clone)]
+pub struct Model {
+    /// The scene it was built from (shipped with the FMU).
+    pub scene: Scene,
+    /// Start node positions in m.
+    pub positions: Vec<Vector3<f64>>,
+    /// Whether each node is pinned.
+    pub pinned: Vec<bool>,
+    /// Bars in scene order.
+    pub bars: Vec<Bar>,
+    /// Cables in scene order.
+    pub cables: Vec<Cable>,
+    /// Gravity in m/s², if any.
+    pub gravity: Option<Vector3<f64>>,
+    /// Nodes (0-based) that take force inputs, in scene order.
+    pub force_inputs: Vec<usize>,
+    /// Cable index of each controlled-cable input.
+    pub controlled: Vec<usize>,
+    /// Start force density of each controlled-cable input, N/m.
+    pub controlled_start: Vec<f64>,
+    /// Solver settings.
+    pub solver: SolverSpec,
+    /// Reduced coordinates.
+    pub coords: Coordinates,
+    /// The correction's precomputed directions.
+    pub correction: CorrectionPlan,
+    /// Layout of the reaction system (cloned into each workspace).
+    pub reactions: Reactions,
+    /// Things the user should know (skipped bars, projected velocities, …).
+    pub warnings: Vec<String>,
+}
+
+impl Model {
+    /// Builds a model with the sparse joint/pin basis.
+    pub fn new(scene: &Scene) -> Result<Self, SceneError> {
+        Self::with_basis(scene, BasisKind::Sparse)
+    }
+
+    /// Builds a model with the chosen basis of null(Pᵀ).
+    pub fn with_basis(scene: &Scene, basis: BasisKind) -> Result<Self, SceneError> {
+        scene.validate()?;
+        let positions: Vec<Vector3<f64>> = scene.nodes.iter().map(|p| Vector3::from(*p)).collect();
+        let mut pinned = vec![false; positions.len()];
+        for &p in &scene.fixed {
+            pinned[p - 1] = true;
+        }
+        let bars: Vec<Bar> = scene
+            .bars
+            .iter()
+            .map(|b| {
+                let nodes = [b.nodes[0] - 1, b.nodes[1] - 1];
+                Bar {
+                    nodes,
+                    mass: b.mass,
+                    length: (positions[nodes[1]] - positions[nodes[0]]).norm(),
+                }
+            })
+            .collect();
+        let mut warnings = Vec::new();
+        let (cables, controlled, controlled_start) =
+            build_cables(scene, &positions, &pinned, &bars)?;
+        let bar_pairs: Vec<(usize, usize)> =
+            bars.iter().map(|b| (b.nodes[0], b.nodes[1])).collect();
+        let coords = Coordinates::new(&bar_pairs, &positions, &pinned, basis)?;
+        let correction =
+            CorrectionPlan::new(&coords, &bars.iter().map(|b| b.length).collect::<Vec<_>>());
+        for &bar in &correction.skipped {
+            warnings.push(format!(
+                "bar {}: its correction direction vanishes (pins or earlier bars already fix it); \
+                 the correction skips it",
+                bar + 1
+            ));
+        }
+        let mut reactions = Reactions::new(&coords, bars.len(), basis == BasisKind::Dense);
+        let units: Vec<Vector3<f64>> = bars
+            .iter()
+            .map(|b| (positions[b.nodes[1]] - positions[b.nodes[0]]) / b.length)
+            .collect();
+        let masses: Vec<f64> = bars.iter().map(|b| b.mass).collect();
+        reactions.assemble(&units, &masses);
+        if !reactions.solve() {
+            warnings.push(
+                "the joint reactions are statically indeterminate (bars form a rigid frame); \
+                 they use the minimum-norm dense solve, whose cost grows faster than linearly"
+                    .to_string(),
+            );
+            reactions = Reactions::new(&coords, bars.len(), true);
+        }
+        Ok(Self {
+            scene: scene.clone(),
+            positions,
+            pinned,
+            bars,
+            cables,
+            gravity: scene.gravity.map(Vector3::from),
+            force_inputs: scene.force_inputs.iter().map(|&n| n - 1).collect(),
+            controlled,
+            controlled_start,
+            solver: scene.solver.clone(),
+            coords,
+            correction,
+            reactions,
+            warnings,
+        })
+    }
+
+    /// Number of physical nodes.
+    pub fn n_nodes(&self) -> usize {
+        self.positions.len()
+    }
+
+    /// Dimension of the integrated state: η₂ and η̇₂, 3r each.
+    pub fn state_len(&self) -> usize {
+        6 * self.coords.r
+    }
+
+    /// Bar lengths in m.
+    pub fn lengths(&self) -> Vec<f64> {
+        self.bars.iter().map(|b| b.length).collect()
+    }
+
+    /// Bar masses in kg.
+    pub fn masses(&self) -> Vec<f64> {
+        self.bars.iter().map(|b| b.mass).collect()
+    }
+}
+
+type CableBuild = (Vec<Cable>, Vec<usize>, Vec<f64>);
+
+fn build_cables(
+    scene: &Scene,
+    positions: &[Vector3<f64>],
+    pinned: &[bool],
+    bars: &[Bar],
+) -> Result<CableBuild, SceneError> {
+    let stress = match &scene.prestress {
+        Some(p) => Some(prestress::self_stress(
+            positions,
+            pinned,
+            &bars.iter().map(|b| b.nodes).collect::<Vec<_>>(),
+            &scene
+                .cables
+                .iter()
+                .map(|c| [c.nodes[0] - 1, c.nodes[1] - 1])
+                .collect::<Vec<_>>(),
+            p.min_tension,
+        )?),
+        None => None,
+    };
+    let mut cables = Vec::new();
+    let mut controlled = Vec::new();
+    let mut controlled_start = Vec::new();
+    for (j, spec) in scene.cables.iter().enumerate() {
+        let nodes = [spec.nodes[0] - 1, spec.nodes[1] - 1];
+        let length = (positions[nodes[1]] - positions[nodes[0]]).norm();
+        let gamma = stress.as_ref().map(|s| s.cables[j]);
+        let law = match spec.control {
+            Some(CableControl::ForceDensity) => {
+                controlled.push(j);
+                let start = gamma.or(spec.force_density).expect("validated");
+                controlled_start.push(start);
+                CableLaw::Controlled {
+                    input: controlled.len() - 1,
+                }
+            }
+            None => {
+                let stiffness = spec.stiffness.expect("validated");
+                let rest_length = match gamma {
+                    Some(g) if g >= stiffness => {
+                        return Err(SceneError::invalid(
+                            format!("cables[{}].stiffness", j + 1),
+                            format!(
+                                "{stiffness} N/m is too soft for the prestress force density \
+                                 {g:.6} N/m (the rest length would be ≤ 0); raise the stiffness \
+                                 or lower prestress.min_tension"
+                            ),
+                        ))
+                    }
+                    Some(g) => length * (1.0 - g / stiffness),
+                    None => spec.rest_length.expect("validated"),
+                };
+                CableLaw::Elastic {
+                    stiffness,
+                    rest_length,
+                    damping: spec.damping,
+                }
+            }
+        };
+        cables.push(Cable { nodes, law });
+    }
+    Ok((cables, controlled, controlled_start))
+}

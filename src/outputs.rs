@@ -1,0 +1,144 @@
+//! Named output quantities. One table, built from the model, names every reported value
+//! the same way in CSV columns and FMU variables (1-based, structured names).
+
+use std::io::Write;
+
+use crate::sim::Simulation;
+
+/// A reportable value.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Quantity {
+    /// Node position component (node, axis), m.
+    NodePosition(usize, usize),
+    /// Node velocity component (node, axis), m/s.
+    NodeVelocity(usize, usize),
+    /// Cable tension, N.
+    CableTension(usize),
+    /// Bar axial force, N, compression positive.
+    BarForce(usize),
+    /// `max |‖bᵢ‖ − lᵢ|`, m.
+    LengthError,
+    /// `max |bᵢ · ḃᵢ|`, m²/s.
+    OrthogonalityError,
+    /// Total energy, J.
+    Energy,
+}
+
+/// One named output.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Output {
+    /// Structured name, e.g. `node[7].x`.
+    pub name: String,
+    /// Unit symbol.
+    pub unit: &'static str,
+    /// What it means.
+    pub description: String,
+    /// How to read it.
+    pub quantity: Quantity,
+}
+
+const AXES: [&str; 3] = ["x", "y", "z"];
+
+impl Quantity {
+    /// Reads the value from a simulation whose outputs are fresh.
+    pub fn value(self, sim: &Simulation) -> f64 {
+        match self {
+            Self::NodePosition(n, k) => sim.node_position(n)[k],
+            Self::NodeVelocity(n, k) => sim.node_velocity(n)[k],
+            Self::CableTension(j) => sim.cable_tension(j),
+            Self::BarForce(i) => sim.bar_force(i),
+            Self::LengthError => sim.length_error(),
+            Self::OrthogonalityError => sim.orthogonality_error(),
+            Self::Energy => sim.energy(),
+        }
+    }
+}
+
+/// Every output of a model, in a fixed order.
+pub fn outputs(sim: &Simulation) -> Vec<Output> {
+    let model = sim.model();
+    let mut out = Vec::new();
+    for n in 0..model.n_nodes() {
+        for (k, axis) in AXES.iter().enumerate() {
+            out.push(Output {
+                name: format!("node[{}].{axis}", n + 1),
+                unit: "m",
+                description: format!("position of node {} along {axis}", n + 1),
+                quantity: Quantity::NodePosition(n, k),
+            });
+        }
+    }
+    for n in 0..model.n_nodes() {
+        for (k, axis) in AXES.iter().enumerate() {
+            out.push(Output {
+                name: format!("node[{}].v{axis}", n + 1),
+                unit: "m/s",
+                description: format!("velocity of node {} along {axis}", n + 1),
+                quantity: Quantity::NodeVelocity(n, k),
+            });
+        }
+    }
+    for (j, c) in model.cables.iter().enumerate() {
+        out.push(Output {
+            name: format!("cable[{}].tension", j + 1),
+            unit: "N",
+            description: format!(
+                "tension of cable {} (nodes {}–{})",
+                j + 1,
+                c.nodes[0] + 1,
+                c.nodes[1] + 1
+            ),
+            quantity: Quantity::CableTension(j),
+        });
+    }
+    for (i, b) in model.bars.iter().enumerate() {
+        out.push(Output {
+            name: format!("bar[{}].force", i + 1),
+            unit: "N",
+            description: format!(
+                "axial force of bar {} (nodes {}–{}), compression positive",
+                i + 1,
+                b.nodes[0] + 1,
+                b.nodes[1] + 1
+            ),
+            quantity: Quantity::BarForce(i),
+        });
+    }
+    out.push(Output {
+        name: "constraint.length_error".into(),
+        unit: "m",
+        description: "largest bar-length violation max |‖b‖ − l|".into(),
+        quantity: Quantity::LengthError,
+    });
+    out.push(Output {
+        name: "constraint.orthogonality_error".into(),
+        unit: "m2/s",
+        description: "largest bar-velocity orthogonality violation max |b·ḃ|".into(),
+        quantity: Quantity::OrthogonalityError,
+    });
+    out.push(Output {
+        name: "energy.total".into(),
+        unit: "J",
+        description: "kinetic + cable strain + gravity energy".into(),
+        quantity: Quantity::Energy,
+    });
+    out
+}
+
+/// Writes a CSV header (`time` then the output names).
+pub fn write_header(w: &mut impl Write, table: &[Output]) -> std::io::Result<()> {
+    write!(w, "time")?;
+    for o in table {
+        write!(w, ",{}", o.name)?;
+    }
+    writeln!(w)
+}
+
+/// Writes one CSV row for the current state.
+pub fn write_row(w: &mut impl Write, table: &[Output], sim: &Simulation) -> std::io::Result<()> {
+    write!(w, "{}", sim.time())?;
+    for o in table {
+        write!(w, ",{:e}", o.quantity.value(sim))?;
+    }
+    writeln!(w)
+}

@@ -1,0 +1,170 @@
+//! Scene files: the user-facing description of a structure (TOML or JSON, same schema).
+//!
+//! Nodes are numbered from 1 in the order listed; every index in a scene, an error
+//! message, a CSV column or an FMU variable uses that numbering.
+
+mod builtin;
+mod validate;
+
+pub use builtin::{builtin, builtin_names, generate, tower_scene, BUILTIN_DEFAULT};
+
+use serde::{Deserialize, Serialize};
+use std::path::Path;
+
+use crate::error::SceneError;
+
+/// A whole scene as read from a file.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Scene {
+    /// Model name; also the FMU's model name.
+    pub name: String,
+    /// Free text shown in the FMU documentation.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub description: Option<String>,
+    /// Node positions `[x, y, z]` in m.
+    pub nodes: Vec<[f64; 3]>,
+    /// Pinned node numbers (1-based).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub fixed: Vec<usize>,
+    /// Rigid bars. A node shared by several bars is a class-k joint.
+    pub bars: Vec<BarSpec>,
+    /// Cables, elastic or force-density controlled.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub cables: Vec<CableSpec>,
+    /// Gravity `[gx, gy, gz]` in m/s²; absent means none.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub gravity: Option<[f64; 3]>,
+    /// Node numbers that receive external force inputs.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub force_inputs: Vec<usize>,
+    /// Initial node velocities `[vx, vy, vz]` in m/s, one per node.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub velocities: Option<Vec<[f64; 3]>>,
+    /// Equilibrium prestress: derive rest lengths / start force densities from a self-stress.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub prestress: Option<PrestressSpec>,
+    /// Solver settings.
+    #[serde(default)]
+    pub solver: SolverSpec,
+}
+
+/// A bar between two nodes.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct BarSpec {
+    /// End node numbers `[a, b]` (1-based); the bar vector is `b - a`.
+    pub nodes: [usize; 2],
+    /// Mass in kg (thin uniform bar).
+    pub mass: f64,
+}
+
+/// How a cable's force density is set.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum CableControl {
+    /// The force density is an input (N/m).
+    ForceDensity,
+}
+
+/// A cable between two nodes.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, Default)]
+#[serde(deny_unknown_fields)]
+pub struct CableSpec {
+    /// End node numbers `[a, b]` (1-based).
+    pub nodes: [usize; 2],
+    /// Elastic stiffness κ in N/m.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub stiffness: Option<f64>,
+    /// Rest length s₀ in m (elastic cables; omit when `prestress` derives it).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub rest_length: Option<f64>,
+    /// Damping in N·s/m, acting on the extension rate while taut.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub damping: Option<f64>,
+    /// Present for a controlled cable.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub control: Option<CableControl>,
+    /// Start force density in N/m (controlled cables; omit when `prestress` derives it).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub force_density: Option<f64>,
+}
+
+/// Request for an equilibrium self-stress of the start geometry.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PrestressSpec {
+    /// The smallest cable tension of the self-stress, in N.
+    pub min_tension: f64,
+}
+
+/// Solver settings of a scene.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct SolverSpec {
+    /// Internal step in s.
+    pub step_size: f64,
+    /// Apply the paper's constraint correction after every step.
+    pub correction: bool,
+}
+
+impl Default for SolverSpec {
+    fn default() -> Self {
+        Self {
+            step_size: 1e-3,
+            correction: true,
+        }
+    }
+}
+
+impl Scene {
+    /// Parses a TOML scene.
+    pub fn from_toml_str(text: &str) -> Result<Self, SceneError> {
+        toml::from_str(text).map_err(|e| SceneError::Parse {
+            format: "TOML",
+            message: e.to_string(),
+        })
+    }
+
+    /// Parses a JSON scene.
+    pub fn from_json_str(text: &str) -> Result<Self, SceneError> {
+        serde_json::from_str(text).map_err(|e| SceneError::Parse {
+            format: "JSON",
+            message: e.to_string(),
+        })
+    }
+
+    /// Reads a scene file; `.json` is JSON, anything else TOML.
+    pub fn from_file(path: &Path) -> Result<Self, SceneError> {
+        let text = std::fs::read_to_string(path).map_err(|e| SceneError::Io {
+            path: path.display().to_string(),
+            message: e.to_string(),
+        })?;
+        let is_json = path
+            .extension()
+            .is_some_and(|e| e.eq_ignore_ascii_case("json"));
+        if is_json {
+            Self::from_json_str(&text)
+        } else {
+            Self::from_toml_str(&text)
+        }
+    }
+
+    /// A built-in name or a file path.
+    pub fn from_name_or_file(arg: &str) -> Result<Self, SceneError> {
+        match builtin(arg) {
+            Some(scene) => Ok(scene),
+            None => Self::from_file(Path::new(arg)),
+        }
+    }
+
+    /// TOML text of this scene.
+    pub fn to_toml_string(&self) -> String {
+        toml::to_string(self).expect("a scene always serializes")
+    }
+
+    /// Checks everything that can be checked without building the model.
+    pub fn validate(&self) -> Result<(), SceneError> {
+        validate::validate(self)
+    }
+}

@@ -1,0 +1,276 @@
+//! A running simulation: the immutable model, the state, the inputs, the scratch space and
+//! the integrator. One step is: integrate → correct positions → correct velocities →
+//! check finiteness (restoring the last good state on failure).
+
+use nalgebra::Vector3;
+
+use crate::dynamics::{self, energy, Inputs, Workspace};
+use crate::error::StepError;
+use crate::integrator::{Integrator, Rhs, Rk4};
+use crate::model::Model;
+
+/// The integrated state.
+#[derive(Debug, Clone, PartialEq)]
+pub struct State {
+    /// Time in s.
+    pub time: f64,
+    /// `[η₂ (3r, m); η̇₂ (3r, m/s)]`, column g of η₂ at `3g..3g+3`.
+    pub y: Vec<f64>,
+}
+
+/// Model + state + inputs + workspace + integrator.
+pub struct Simulation {
+    model: Model,
+    /// Current inputs (set between steps).
+    pub inputs: Inputs,
+    state: State,
+    last_good: Vec<f64>,
+    ws: Workspace,
+    acc: Vec<f64>,
+    integrator: Box<dyn Integrator>,
+    /// Apply the paper's correction after each step.
+    pub correction: bool,
+    warnings: Vec<String>,
+}
+
+struct System<'a> {
+    model: &'a Model,
+    inputs: &'a Inputs,
+    ws: &'a mut Workspace,
+}
+
+impl Rhs for System<'_> {
+    fn eval(&mut self, _t: f64, y: &[f64], dy: &mut [f64]) {
+        let half = y.len() / 2;
+        let (q, v) = y.split_at(half);
+        let (dq, dv) = dy.split_at_mut(half);
+        dq.copy_from_slice(v);
+        dynamics::accelerations(self.model, self.inputs, q, v, self.ws, dv);
+    }
+}
+
+impl Simulation {
+    /// Starts at the scene's geometry and (projected) velocities with RK4.
+    pub fn new(model: Model) -> Self {
+        let integrator = Box::new(Rk4::new(model.state_len()));
+        Self::with_integrator(model, integrator)
+    }
+
+    /// Starts with a chosen integrator.
+    pub fn with_integrator(model: Model, integrator: Box<dyn Integrator>) -> Self {
+        let mut ws = Workspace::new(&model);
+        let mut warnings = model.warnings.clone();
+        let y = initial_state(&model, &mut ws, &mut warnings);
+        let n = y.len();
+        let mut sim = Self {
+            inputs: Inputs::start(&model),
+            correction: model.solver.correction,
+            state: State { time: 0.0, y },
+            last_good: vec![0.0; n],
+            ws,
+            acc: vec![0.0; n / 2],
+            integrator,
+            model,
+            warnings,
+        };
+        sim.refresh();
+        sim
+    }
+
+    /// The model.
+    pub fn model(&self) -> &Model {
+        &self.model
+    }
+
+    /// Model and load-time warnings.
+    pub fn warnings(&self) -> &[String] {
+        &self.warnings
+    }
+
+    /// The current state.
+    pub fn state(&self) -> &State {
+        &self.state
+    }
+
+    /// Replaces the state (e.g. from a snapshot) and re-evaluates the outputs.
+    pub fn set_state(&mut self, state: State) {
+        assert_eq!(state.y.len(), self.state.y.len(), "state length");
+        self.state = state;
+        self.refresh();
+    }
+
+    /// Current time in s.
+    pub fn time(&self) -> f64 {
+        self.state.time
+    }
+
+    /// The integrator in use.
+    pub fn integrator(&self) -> &dyn Integrator {
+        self.integrator.as_ref()
+    }
+
+    /// Takes `n` steps of `h` from the current time; time is `t₀ + k h`, not a running sum.
+    pub fn advance(&mut self, n: u64, h: f64) -> Result<(), StepError> {
+        let t0 = self.state.time;
+        for k in 0..n {
+            self.step_to(t0 + k as f64 * h, t0 + (k + 1) as f64 * h)?;
+        }
+        Ok(())
+    }
+
+    /// One step from `t` to `t_next`. On failure the state stays at `t`.
+    pub fn step_to(&mut self, t: f64, t_next: f64) -> Result<(), StepError> {
+        self.check_inputs()?;
+        self.last_good.copy_from_slice(&self.state.y);
+        let mut system = System {
+            model: &self.model,
+            inputs: &self.inputs,
+            ws: &mut self.ws,
+        };
+        self.integrator
+            .step(&mut system, t, &mut self.state.y, t_next - t);
+        if self.correction {
+            self.correct();
+        }
+        if let Some(i) = self.state.y.iter().position(|x| !x.is_finite()) {
+            self.state.y.copy_from_slice(&self.last_good);
+            self.refresh();
+            let half = self.state.y.len() / 2;
+            let what = if i < half { "position" } else { "velocity" };
+            return Err(StepError::NonFinite {
+                time: t,
+                what: format!("reduced {what} component {}", i % half + 1),
+            });
+        }
+        self.state.time = t_next;
+        Ok(())
+    }
+
+    fn correct(&mut self) {
+        let half = self.state.y.len() / 2;
+        let (q, v) = self.state.y.split_at_mut(half);
+        let plan = &self.model.correction;
+        plan.correct_positions(&self.model.coords, q);
+        plan.correct_velocities(&self.model.coords, q, v);
+    }
+
+    fn check_inputs(&self) -> Result<(), StepError> {
+        for (k, &g) in self.inputs.force_density.iter().enumerate() {
+            if !g.is_finite() {
+                return Err(StepError::NonFiniteInput {
+                    name: format!("cable[{}].force_density", self.model.controlled[k] + 1),
+                    value: g,
+                });
+            }
+        }
+        for (k, f) in self.inputs.node_force.iter().enumerate() {
+            for (axis, &x) in ["fx", "fy", "fz"].iter().zip(f.iter()) {
+                if !x.is_finite() {
+                    return Err(StepError::NonFiniteInput {
+                        name: format!("node[{}].{axis}", self.model.force_inputs[k] + 1),
+                        value: x,
+                    });
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// Re-evaluates forces, λ and accelerations at the current state (for the outputs).
+    pub fn refresh(&mut self) {
+        let half = self.state.y.len() / 2;
+        let (q, v) = self.state.y.split_at(half);
+        dynamics::accelerations(&self.model, &self.inputs, q, v, &mut self.ws, &mut self.acc);
+    }
+
+    /// The workspace of the last evaluation (node positions, γ, λ, …).
+    pub fn workspace(&self) -> &Workspace {
+        &self.ws
+    }
+
+    /// Position of node `n` (0-based), m.
+    pub fn node_position(&self, n: usize) -> Vector3<f64> {
+        self.ws.node_pos[n]
+    }
+
+    /// Velocity of node `n` (0-based), m/s.
+    pub fn node_velocity(&self, n: usize) -> Vector3<f64> {
+        self.ws.node_vel[n]
+    }
+
+    /// Acceleration of node `n` (0-based), m/s², from the last evaluation.
+    pub fn node_acceleration(&self, n: usize) -> Vector3<f64> {
+        self.model.coords.node_end[n].map_or(Vector3::zeros(), |e| self.ws.end_acc[e])
+    }
+
+    /// Tension of cable `j` (0-based), N.
+    pub fn cable_tension(&self, j: usize) -> f64 {
+        let [a, b] = self.model.cables[j].nodes;
+        self.ws.gamma[j] * (self.ws.node_pos[b] - self.ws.node_pos[a]).norm()
+    }
+
+    /// Axial force of bar `i` (0-based), N, compression positive.
+    pub fn bar_force(&self, i: usize) -> f64 {
+        self.ws.lambda[i] * self.model.bars[i].length
+    }
+
+    /// `max |‖bᵢ‖ − lᵢ|`, m.
+    pub fn length_error(&self) -> f64 {
+        energy::length_error(&self.model, &self.ws)
+    }
+
+    /// `max |bᵢ · ḃᵢ|`, m²/s.
+    pub fn orthogonality_error(&self) -> f64 {
+        energy::orthogonality_error(&self.model, &self.ws)
+    }
+
+    /// Kinetic + cable strain + gravity energy, J.
+    pub fn energy(&self) -> f64 {
+        energy::kinetic(&self.model, &self.ws)
+            + energy::potential(&self.model, &self.inputs, &self.ws)
+    }
+
+    /// Linear momentum, kg·m/s.
+    pub fn linear_momentum(&self) -> Vector3<f64> {
+        energy::linear_momentum(&self.model, &self.ws)
+    }
+
+    /// Angular momentum about the origin, kg·m²/s.
+    pub fn angular_momentum(&self) -> Vector3<f64> {
+        energy::angular_momentum(&self.model, &self.ws)
+    }
+}
+
+/// η₂ = N U₂ and η̇₂ = Ṅ U₂ from the scene, then the velocity correction; warns when the
+/// scene's velocities had to be projected.
+fn initial_state(model: &Model, ws: &mut Workspace, warnings: &mut Vec<String>) -> Vec<f64> {
+    let coords = &model.coords;
+    let r3 = 3 * coords.r;
+    let mut y = vec![0.0; 2 * r3];
+    let given: Vec<Vector3<f64>> = match &model.scene.velocities {
+        Some(vs) => vs.iter().map(|v| Vector3::from(*v)).collect(),
+        None => vec![Vector3::zeros(); model.n_nodes()],
+    };
+    {
+        let (q, v) = y.split_at_mut(r3);
+        for e in 0..coords.n_ends() {
+            let node = coords.end_node[e];
+            coords.scatter(e, &model.positions[node], q);
+            coords.scatter(e, &given[node], v);
+        }
+        model.correction.correct_velocities(coords, q, v);
+    }
+    let (q, v) = y.split_at(r3);
+    dynamics::kinematics(model, q, v, ws);
+    let scale = given.iter().map(|v| v.norm()).fold(0.0, f64::max);
+    let change = (0..model.n_nodes())
+        .map(|n| (ws.node_vel[n] - given[n]).norm())
+        .fold(0.0, f64::max);
+    if change > 1e-12 * scale.max(1e-300) && scale > 0.0 {
+        warnings.push(format!(
+            "velocities: the initial velocities violate the constraints (pins, joints or rigid \
+             bars); they were projected onto them (largest change {change:.3e} m/s)"
+        ));
+    }
+    y
+}
