@@ -144,6 +144,17 @@ impl Reactions {
         if self.n == 0 {
             return true;
         }
+        // Non-finite data would stall the factorisations; let the NaN reach the state
+        // check, which restores the last good point.
+        if !self
+            .values
+            .iter()
+            .chain(self.rhs.iter())
+            .all(|x| x.is_finite())
+        {
+            self.rhs.fill(f64::NAN);
+            return true;
+        }
         if let Solver::Sparse { pattern, cholesky } = &mut self.solver {
             let ok = match cholesky {
                 Some(ch) => ch.refactor(&self.values).is_ok(),
@@ -222,7 +233,10 @@ fn block_pattern(nc: usize, blocks: &[(usize, usize)]) -> (SparsityPattern, Vec<
 
 /// Minimum-norm solve through the SVD, with the rank cut at round-off.
 fn solve_dense(k: DMatrix<f64>, rhs: &mut DVector<f64>) {
-    let svd = k.svd(true, true);
+    let Some(svd) = k.try_svd(true, true, f64::EPSILON, 10_000) else {
+        rhs.fill(f64::NAN);
+        return;
+    };
     let tol = 1e-12 * svd.singular_values.max();
     let x = svd.solve(rhs, tol).expect("U and V were computed");
     rhs.copy_from(&x);

@@ -57,15 +57,36 @@ impl Coordinates {
         pinned: &[bool],
         kind: BasisKind,
     ) -> Result<Self, SceneError> {
-        let n_nodes = positions.len();
-        let end_node: Vec<usize> = bars.iter().flat_map(|&(a, b)| [a, b]).collect();
-        let mut node_ends = vec![Vec::new(); n_nodes];
-        for (e, &n) in end_node.iter().enumerate() {
-            node_ends[n].push(e);
+        let mut coords = Self::skeleton(bars, positions.len(), pinned);
+        let node_ends = coords.node_ends(positions.len());
+        match kind {
+            BasisKind::Sparse => coords.fill_sparse(&node_ends, positions, pinned),
+            BasisKind::Dense => coords.fill_dense(&node_ends, positions, pinned)?,
         }
-        let node_end = node_ends.iter().map(|ends| ends.first().copied()).collect();
-        let static_bar = bars.iter().map(|&(a, b)| pinned[a] && pinned[b]).collect();
-        let mut coords = Self {
+        Ok(coords)
+    }
+
+    /// General constraints `N P = D` on the bar ends (`constraints` with right-hand sides
+    /// `d`), eliminated by SVD; used for constraint sets other than joints and pins.
+    pub fn general(
+        bars: &[(usize, usize)],
+        n_nodes: usize,
+        constraints: Vec<ConstraintColumn>,
+        d: Vec<Vector3<f64>>,
+    ) -> Result<Self, SceneError> {
+        let mut coords = Self::skeleton(bars, n_nodes, &vec![false; n_nodes]);
+        coords.constraints = constraints;
+        coords.eliminate(d)?;
+        Ok(coords)
+    }
+
+    fn skeleton(bars: &[(usize, usize)], n_nodes: usize, pinned: &[bool]) -> Self {
+        let end_node: Vec<usize> = bars.iter().flat_map(|&(a, b)| [a, b]).collect();
+        let mut node_end = vec![None; n_nodes];
+        for (e, &n) in end_node.iter().enumerate().rev() {
+            node_end[n] = Some(e);
+        }
+        Self {
             r: 0,
             end_node,
             node_end,
@@ -73,13 +94,16 @@ impl Coordinates {
             row_start: Vec::new(),
             entries: Vec::new(),
             constraints: Vec::new(),
-            static_bar,
-        };
-        match kind {
-            BasisKind::Sparse => coords.fill_sparse(&node_ends, positions, pinned),
-            BasisKind::Dense => coords.fill_dense(&node_ends, positions, pinned)?,
+            static_bar: bars.iter().map(|&(a, b)| pinned[a] && pinned[b]).collect(),
         }
-        Ok(coords)
+    }
+
+    fn node_ends(&self, n_nodes: usize) -> Vec<Vec<End>> {
+        let mut node_ends = vec![Vec::new(); n_nodes];
+        for (e, &n) in self.end_node.iter().enumerate() {
+            node_ends[n].push(e);
+        }
+        node_ends
     }
 
     fn fill_sparse(&mut self, node_ends: &[Vec<End>], positions: &[Vector3<f64>], pinned: &[bool]) {
@@ -129,7 +153,6 @@ impl Coordinates {
         positions: &[Vector3<f64>],
         pinned: &[bool],
     ) -> Result<(), SceneError> {
-        let n_ends = self.end_node.len();
         let mut d_cols = Vec::new();
         for (n, ends) in node_ends.iter().enumerate() {
             for &e in ends.iter().skip(1) {
@@ -147,6 +170,14 @@ impl Coordinates {
                 }
             }
         }
+        self.eliminate(d_cols)
+    }
+
+    /// Eliminates general constraints `N P = D` (the columns in `self.constraints`, with
+    /// `d_cols` their right-hand sides) through the SVD of `P`: the rank it reveals drops
+    /// redundant columns, and a `D` outside the range of `P` is a contradiction.
+    pub fn eliminate(&mut self, d_cols: Vec<Vector3<f64>>) -> Result<(), SceneError> {
+        let n_ends = self.end_node.len();
         let nc = self.constraints.len();
         // Pad P to square so that the SVD returns a full U.
         let mut p = DMatrix::<f64>::zeros(n_ends, n_ends.max(nc));

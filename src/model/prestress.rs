@@ -17,6 +17,10 @@ pub struct SelfStress {
 }
 
 /// Finds a self-stress whose smallest cable tension is `min_tension` (N).
+///
+/// The free-standing structure (equilibrium at every node) is tried first, so that
+/// elements between pinned nodes share the structure's own self-stress; only if it has
+/// none are the pinned nodes' equations dropped.
 pub fn self_stress(
     positions: &[Vector3<f64>],
     pinned: &[bool],
@@ -24,6 +28,35 @@ pub fn self_stress(
     cables: &[[usize; 2]],
     min_tension: f64,
 ) -> Result<SelfStress, SceneError> {
+    let unpinned = vec![false; pinned.len()];
+    let mut x = match positive_null_vector(positions, &unpinned, bars, cables) {
+        Ok(x) => x,
+        Err(_) => positive_null_vector(positions, pinned, bars, cables)?,
+    };
+    let min_t = cables
+        .iter()
+        .enumerate()
+        .map(|(j, &[p, q])| x[j] * (positions[q] - positions[p]).norm())
+        .fold(f64::INFINITY, f64::min);
+    let scale = if min_t.is_finite() {
+        min_tension / min_t
+    } else {
+        1.0
+    };
+    x *= scale;
+    Ok(SelfStress {
+        cables: x.rows(0, cables.len()).iter().copied().collect(),
+        bars: x.rows(cables.len(), bars.len()).iter().copied().collect(),
+    })
+}
+
+/// A null vector of the equilibrium matrix at the unpinned nodes with every entry > 0.
+fn positive_null_vector(
+    positions: &[Vector3<f64>],
+    pinned: &[bool],
+    bars: &[[usize; 2]],
+    cables: &[[usize; 2]],
+) -> Result<DVector<f64>, SceneError> {
     let free: Vec<Option<usize>> = {
         let mut k = 0;
         pinned
@@ -93,21 +126,7 @@ pub fn self_stress(
             )));
         }
     }
-    let min_t = cables
-        .iter()
-        .enumerate()
-        .map(|(j, &[p, q])| x[j] * (positions[q] - positions[p]).norm())
-        .fold(f64::INFINITY, f64::min);
-    let scale = if min_t.is_finite() {
-        min_tension / min_t
-    } else {
-        1.0
-    };
-    x *= scale;
-    Ok(SelfStress {
-        cables: x.rows(0, cables.len()).iter().copied().collect(),
-        bars: x.rows(cables.len(), bars.len()).iter().copied().collect(),
-    })
+    Ok(x)
 }
 
 /// Maximises `min(Z w)` over `|w|∞ ≤ 1`; `None` when the best minimum is not positive.
