@@ -9,6 +9,7 @@
 pub mod correction;
 pub mod dynamics;
 pub mod error;
+pub mod fmi;
 pub mod integrator;
 pub mod model;
 pub mod outputs;

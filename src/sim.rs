@@ -33,6 +33,22 @@ pub struct Simulation {
     warnings: Vec<String>,
 }
 
+impl Clone for Simulation {
+    fn clone(&self) -> Self {
+        Self {
+            model: self.model.clone(),
+            inputs: self.inputs.clone(),
+            state: self.state.clone(),
+            last_good: self.last_good.clone(),
+            ws: self.ws.clone(),
+            acc: self.acc.clone(),
+            integrator: self.integrator.boxed_clone(),
+            correction: self.correction,
+            warnings: self.warnings.clone(),
+        }
+    }
+}
+
 struct System<'a> {
     model: &'a Model,
     inputs: &'a Inputs,
@@ -102,6 +118,11 @@ impl Simulation {
     /// Current time in s.
     pub fn time(&self) -> f64 {
         self.state.time
+    }
+
+    /// Sets the current time (e.g. an experiment's start time).
+    pub fn set_time(&mut self, time: f64) {
+        self.state.time = time;
     }
 
     /// The integrator in use.

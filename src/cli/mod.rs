@@ -8,8 +8,8 @@ use std::path::PathBuf;
 
 use clap::{Parser, Subcommand};
 
-use tensegrity_fmu::outputs;
 use tensegrity_fmu::scene::{self, Scene, BUILTIN_DEFAULT};
+use tensegrity_fmu::{fmi, outputs};
 use tensegrity_fmu::{Model, Simulation};
 
 /// Tensegrity dynamics (Cheong, Skelton & Cho 2014) as FMI 2.0 co-simulation FMUs.
@@ -41,6 +41,17 @@ enum Command {
         /// CSV file (default: <scene name>.csv).
         #[arg(short, long)]
         output: Option<PathBuf>,
+    },
+    /// Package a scene as an FMI 2.0 co-simulation FMU and print its path.
+    Build {
+        /// Scene file (.toml or .json) or built-in name; default: prism2.
+        scene: Option<String>,
+        /// Output file (default: <scene name>.fmu).
+        #[arg(short, long)]
+        output: Option<PathBuf>,
+        /// The generic FMU binary (default: libtensegrity_fmu_binary.so next to this program).
+        #[arg(long)]
+        binary: Option<PathBuf>,
     },
     /// Print a built-in scene as TOML (or list them with no name).
     Scene {
@@ -93,6 +104,11 @@ pub fn run(cli: Cli) -> Result<(), String> {
             Ok(())
         }
         Command::Bench { stages, seconds } => bench::scaling(&stages, seconds),
+        Command::Build {
+            scene,
+            output,
+            binary,
+        } => build(scene.as_deref().unwrap_or(BUILTIN_DEFAULT), output, binary),
     }
 }
 
@@ -139,5 +155,32 @@ fn simulate(
     }
     w.flush().map_err(io)?;
     println!("{}", path.display());
+    Ok(())
+}
+
+fn build(scene_arg: &str, output: Option<PathBuf>, binary: Option<PathBuf>) -> Result<(), String> {
+    let scene = Scene::from_name_or_file(scene_arg).map_err(|e| e.to_string())?;
+    let binary = match binary {
+        Some(b) => b,
+        None => {
+            let exe = std::env::current_exe().map_err(|e| e.to_string())?;
+            let dir = exe.parent().ok_or("cannot locate this program's folder")?;
+            // `cargo run` puts the program in target/<profile>/, the library beside it.
+            dir.join("libtensegrity_fmu_binary.so")
+        }
+    };
+    if !binary.is_file() {
+        return Err(format!(
+            "the FMU binary {} is missing: build it with `cargo build --release --workspace`, or pass --binary",
+            binary.display()
+        ));
+    }
+    let out = output.unwrap_or_else(|| PathBuf::from(format!("{}.fmu", scene.name)));
+    let built = fmi::package::build_fmu(&scene, &binary, &out)?;
+    eprintln!(
+        "built {} ({} variables, model identifier {}, GUID {})",
+        scene.name, built.variables, built.model_identifier, built.guid
+    );
+    println!("{}", out.display());
     Ok(())
 }

@@ -178,6 +178,22 @@ impl Model {
     pub fn masses(&self) -> Vec<f64> {
         self.bars.iter().map(|b| b.mass).collect()
     }
+
+    /// The scene with every derived value written out (no `prestress`): rest lengths and
+    /// start force densities as built. It builds the same model.
+    pub fn explicit_scene(&self) -> Scene {
+        let mut scene = self.scene.clone();
+        scene.prestress = None;
+        for (spec, cable) in scene.cables.iter_mut().zip(&self.cables) {
+            match cable.law {
+                CableLaw::Elastic { rest_length, .. } => spec.rest_length = Some(rest_length),
+                CableLaw::Controlled { input } => {
+                    spec.force_density = Some(self.controlled_start[input])
+                }
+            }
+        }
+        scene
+    }
 }
 
 type CableBuild = (Vec<Cable>, Vec<usize>, Vec<f64>);

@@ -1,0 +1,604 @@
+//! The generic FMI 2.0 co-simulation binary. Every function is thin: null checks, a
+//! panic guard, argument conversion, one call to a safe `Instance` method, and the status
+//! mapping; messages go to the importer's logger. One binary serves every scene: the
+//! model is read from `resources/` at `fmi2Instantiate`.
+#![allow(non_snake_case)]
+#![allow(clippy::missing_safety_doc)]
+
+mod ffi;
+
+use std::ffi::c_char;
+use std::panic::{catch_unwind, AssertUnwindSafe};
+use std::ptr;
+
+use fmi_sys::fmi2::*;
+use tensegrity_fmu::fmi::snapshot::Snapshot;
+use tensegrity_fmu::fmi::variables::BaseType;
+use tensegrity_fmu::fmi::{resource_path, Category, FmiError, FmiResult, Instance, Status};
+
+use ffi::{slice, slice_mut, text, Component};
+
+const ERROR: fmi2Status = fmi2Status_fmi2Error;
+
+fn status(s: Status) -> fmi2Status {
+    match s {
+        Status::Ok => fmi2Status_fmi2OK,
+        Status::Warning => fmi2Status_fmi2Warning,
+        Status::Discard => fmi2Status_fmi2Discard,
+        Status::Error => fmi2Status_fmi2Error,
+    }
+}
+
+/// Runs `body` on the instance behind `c`, catching panics and logging failures.
+fn call(c: fmi2Component, name: &str, body: impl FnOnce(&mut Instance) -> FmiResult) -> fmi2Status {
+    let Some(component) = (unsafe { (c as *mut Component).as_mut() }) else {
+        return ERROR;
+    };
+    let result = catch_unwind(AssertUnwindSafe(|| body(&mut component.instance)));
+    let out = match result {
+        Ok(Ok(s)) => status(s),
+        Ok(Err(e)) => {
+            component.instance.fail(&e);
+            status(e.status)
+        }
+        Err(panic) => {
+            let what = panic
+                .downcast_ref::<&str>()
+                .map(|s| s.to_string())
+                .or_else(|| panic.downcast_ref::<String>().cloned())
+                .unwrap_or_default();
+            component.instance.fail(&FmiError {
+                status: Status::Error,
+                message: format!("{name}: internal error: {what}"),
+            });
+            ERROR
+        }
+    };
+    component.flush_log();
+    out
+}
+
+fn fail(message: String) -> FmiError {
+    FmiError {
+        status: Status::Error,
+        message,
+    }
+}
+
+#[no_mangle]
+pub extern "C" fn fmi2GetTypesPlatform() -> *const c_char {
+    fmi2TypesPlatform.as_ptr().cast()
+}
+
+#[no_mangle]
+pub extern "C" fn fmi2GetVersion() -> *const c_char {
+    fmi2Version.as_ptr().cast()
+}
+
+#[no_mangle]
+pub unsafe extern "C" fn fmi2SetDebugLogging(
+    c: fmi2Component,
+    loggingOn: fmi2Boolean,
+    nCategories: usize,
+    categories: *const fmi2String,
+) -> fmi2Status {
+    call(c, "fmi2SetDebugLogging", |i| {
+        let names = slice(categories, nCategories, "fmi2SetDebugLogging: categories")?;
+        let names: Vec<String> = names.iter().map(|&p| text(p).unwrap_or_default()).collect();
+        i.set_debug_logging(loggingOn != 0, &names)
+    })
+}
+
+#[no_mangle]
+pub unsafe extern "C" fn fmi2Instantiate(
+    instanceName: fmi2String,
+    fmuType: fmi2Type,
+    fmuGUID: fmi2String,
+    fmuResourceLocation: fmi2String,
+    functions: *const fmi2CallbackFunctions,
+    _visible: fmi2Boolean,
+    loggingOn: fmi2Boolean,
+) -> fmi2Component {
+    let Some(functions) = functions.as_ref() else {
+        return ptr::null_mut();
+    };
+    if functions.logger.is_none() {
+        return ptr::null_mut();
+    }
+    let name = text(instanceName).unwrap_or_default();
+    let report = |message: &str| {
+        ffi::log(
+            functions,
+            &name,
+            fmi2Status_fmi2Error,
+            Category::Error,
+            message,
+        )
+    };
+    let built = catch_unwind(|| {
+        if fmuType != fmi2Type_fmi2CoSimulation {
+            return Err("fmi2Instantiate: this FMU supports co-simulation only".to_string());
+        }
+        let guid = text(fmuGUID).ok_or("fmi2Instantiate: fmuGUID is missing")?;
+        let location =
+            text(fmuResourceLocation).ok_or("fmi2Instantiate: fmuResourceLocation is missing")?;
+        let resources = resource_path(&location).map_err(|e| format!("fmi2Instantiate: {e}"))?;
+        Instance::instantiate(&name, &guid, &resources, loggingOn != 0)
+    });
+    match built {
+        Ok(Ok(instance)) => {
+            let mut component = Box::new(Component::new(instance, functions));
+            component.flush_log();
+            Box::into_raw(component) as fmi2Component
+        }
+        Ok(Err(message)) => {
+            report(&message);
+            ptr::null_mut()
+        }
+        Err(_) => {
+            report("fmi2Instantiate: internal error");
+            ptr::null_mut()
+        }
+    }
+}
+
+#[no_mangle]
+pub unsafe extern "C" fn fmi2FreeInstance(c: fmi2Component) {
+    if !c.is_null() {
+        let _ = catch_unwind(|| drop(Box::from_raw(c as *mut Component)));
+    }
+}
+
+#[no_mangle]
+pub unsafe extern "C" fn fmi2SetupExperiment(
+    c: fmi2Component,
+    _toleranceDefined: fmi2Boolean,
+    _tolerance: fmi2Real,
+    startTime: fmi2Real,
+    stopTimeDefined: fmi2Boolean,
+    stopTime: fmi2Real,
+) -> fmi2Status {
+    call(c, "fmi2SetupExperiment", |i| {
+        i.setup_experiment(startTime, (stopTimeDefined != 0).then_some(stopTime))
+    })
+}
+
+#[no_mangle]
+pub unsafe extern "C" fn fmi2EnterInitializationMode(c: fmi2Component) -> fmi2Status {
+    call(
+        c,
+        "fmi2EnterInitializationMode",
+        Instance::enter_initialization_mode,
+    )
+}
+
+#[no_mangle]
+pub unsafe extern "C" fn fmi2ExitInitializationMode(c: fmi2Component) -> fmi2Status {
+    call(
+        c,
+        "fmi2ExitInitializationMode",
+        Instance::exit_initialization_mode,
+    )
+}
+
+#[no_mangle]
+pub unsafe extern "C" fn fmi2Terminate(c: fmi2Component) -> fmi2Status {
+    call(c, "fmi2Terminate", Instance::terminate)
+}
+
+#[no_mangle]
+pub unsafe extern "C" fn fmi2Reset(c: fmi2Component) -> fmi2Status {
+    call(c, "fmi2Reset", Instance::reset)
+}
+
+#[no_mangle]
+pub unsafe extern "C" fn fmi2GetReal(
+    c: fmi2Component,
+    vr: *const fmi2ValueReference,
+    nvr: usize,
+    value: *mut fmi2Real,
+) -> fmi2Status {
+    call(c, "fmi2GetReal", |i| {
+        let vrs = slice(vr, nvr, "fmi2GetReal: vr")?;
+        let values = slice_mut(value, nvr, "fmi2GetReal: value")?;
+        i.get("fmi2GetReal", BaseType::Real, vrs, values)
+    })
+}
+
+#[no_mangle]
+pub unsafe extern "C" fn fmi2GetBoolean(
+    c: fmi2Component,
+    vr: *const fmi2ValueReference,
+    nvr: usize,
+    value: *mut fmi2Boolean,
+) -> fmi2Status {
+    call(c, "fmi2GetBoolean", |i| {
+        let vrs = slice(vr, nvr, "fmi2GetBoolean: vr")?;
+        let out = slice_mut(value, nvr, "fmi2GetBoolean: value")?;
+        let mut reals = vec![0.0; nvr];
+        let s = i.get("fmi2GetBoolean", BaseType::Boolean, vrs, &mut reals)?;
+        for (o, r) in out.iter_mut().zip(reals) {
+            *o = fmi2Boolean::from(r != 0.0);
+        }
+        Ok(s)
+    })
+}
+
+#[no_mangle]
+pub unsafe extern "C" fn fmi2GetInteger(
+    c: fmi2Component,
+    vr: *const fmi2ValueReference,
+    nvr: usize,
+    _value: *mut fmi2Integer,
+) -> fmi2Status {
+    call(c, "fmi2GetInteger", |i| {
+        i.untyped("fmi2GetInteger", slice(vr, nvr, "fmi2GetInteger: vr")?)
+    })
+}
+
+#[no_mangle]
+pub unsafe extern "C" fn fmi2GetString(
+    c: fmi2Component,
+    vr: *const fmi2ValueReference,
+    nvr: usize,
+    _value: *mut fmi2String,
+) -> fmi2Status {
+    call(c, "fmi2GetString", |i| {
+        i.untyped("fmi2GetString", slice(vr, nvr, "fmi2GetString: vr")?)
+    })
+}
+
+#[no_mangle]
+pub unsafe extern "C" fn fmi2SetReal(
+    c: fmi2Component,
+    vr: *const fmi2ValueReference,
+    nvr: usize,
+    value: *const fmi2Real,
+) -> fmi2Status {
+    call(c, "fmi2SetReal", |i| {
+        let vrs = slice(vr, nvr, "fmi2SetReal: vr")?;
+        let values = slice(value, nvr, "fmi2SetReal: value")?;
+        i.set("fmi2SetReal", BaseType::Real, vrs, values)
+    })
+}
+
+#[no_mangle]
+pub unsafe extern "C" fn fmi2SetBoolean(
+    c: fmi2Component,
+    vr: *const fmi2ValueReference,
+    nvr: usize,
+    value: *const fmi2Boolean,
+) -> fmi2Status {
+    call(c, "fmi2SetBoolean", |i| {
+        let vrs = slice(vr, nvr, "fmi2SetBoolean: vr")?;
+        let values: Vec<f64> = slice(value, nvr, "fmi2SetBoolean: value")?
+            .iter()
+            .map(|&b| f64::from(u8::from(b != 0)))
+            .collect();
+        i.set("fmi2SetBoolean", BaseType::Boolean, vrs, &values)
+    })
+}
+
+#[no_mangle]
+pub unsafe extern "C" fn fmi2SetInteger(
+    c: fmi2Component,
+    vr: *const fmi2ValueReference,
+    nvr: usize,
+    _value: *const fmi2Integer,
+) -> fmi2Status {
+    call(c, "fmi2SetInteger", |i| {
+        i.untyped("fmi2SetInteger", slice(vr, nvr, "fmi2SetInteger: vr")?)
+    })
+}
+
+#[no_mangle]
+pub unsafe extern "C" fn fmi2SetString(
+    c: fmi2Component,
+    vr: *const fmi2ValueReference,
+    nvr: usize,
+    _value: *const fmi2String,
+) -> fmi2Status {
+    call(c, "fmi2SetString", |i| {
+        i.untyped("fmi2SetString", slice(vr, nvr, "fmi2SetString: vr")?)
+    })
+}
+
+#[no_mangle]
+pub unsafe extern "C" fn fmi2GetFMUstate(c: fmi2Component, state: *mut fmi2FMUstate) -> fmi2Status {
+    call(c, "fmi2GetFMUstate", |i| {
+        let slot = state
+            .as_mut()
+            .ok_or_else(|| fail("fmi2GetFMUstate: FMUstate is NULL".into()))?;
+        let snapshot = i.get_state()?;
+        match (*slot as *mut Snapshot).as_mut() {
+            Some(existing) => *existing = snapshot,
+            None => *slot = Box::into_raw(Box::new(snapshot)) as fmi2FMUstate,
+        }
+        Ok(Status::Ok)
+    })
+}
+
+#[no_mangle]
+pub unsafe extern "C" fn fmi2SetFMUstate(c: fmi2Component, state: fmi2FMUstate) -> fmi2Status {
+    call(c, "fmi2SetFMUstate", |i| {
+        let snapshot = (state as *const Snapshot)
+            .as_ref()
+            .ok_or_else(|| fail("fmi2SetFMUstate: FMUstate is NULL".into()))?;
+        i.set_state(snapshot)
+    })
+}
+
+#[no_mangle]
+pub unsafe extern "C" fn fmi2FreeFMUstate(
+    c: fmi2Component,
+    state: *mut fmi2FMUstate,
+) -> fmi2Status {
+    call(c, "fmi2FreeFMUstate", |_| {
+        if let Some(slot) = state.as_mut() {
+            if !slot.is_null() {
+                drop(Box::from_raw(*slot as *mut Snapshot));
+                *slot = ptr::null_mut();
+            }
+        }
+        Ok(Status::Ok)
+    })
+}
+
+#[no_mangle]
+pub unsafe extern "C" fn fmi2SerializedFMUstateSize(
+    c: fmi2Component,
+    state: fmi2FMUstate,
+    size: *mut usize,
+) -> fmi2Status {
+    call(c, "fmi2SerializedFMUstateSize", |_| {
+        let snapshot = (state as *const Snapshot)
+            .as_ref()
+            .ok_or_else(|| fail("fmi2SerializedFMUstateSize: FMUstate is NULL".into()))?;
+        let size = size
+            .as_mut()
+            .ok_or_else(|| fail("fmi2SerializedFMUstateSize: size is NULL".into()))?;
+        *size = snapshot.to_bytes().len();
+        Ok(Status::Ok)
+    })
+}
+
+#[no_mangle]
+pub unsafe extern "C" fn fmi2SerializeFMUstate(
+    c: fmi2Component,
+    state: fmi2FMUstate,
+    serializedState: *mut fmi2Byte,
+    size: usize,
+) -> fmi2Status {
+    call(c, "fmi2SerializeFMUstate", |_| {
+        let snapshot = (state as *const Snapshot)
+            .as_ref()
+            .ok_or_else(|| fail("fmi2SerializeFMUstate: FMUstate is NULL".into()))?;
+        let bytes = snapshot.to_bytes();
+        if size < bytes.len() {
+            return Err(fail(format!(
+                "fmi2SerializeFMUstate: buffer of {size} bytes is smaller than the {} needed",
+                bytes.len()
+            )));
+        }
+        let out = slice_mut(
+            serializedState.cast::<u8>(),
+            bytes.len(),
+            "fmi2SerializeFMUstate: buffer",
+        )?;
+        out.copy_from_slice(&bytes);
+        Ok(Status::Ok)
+    })
+}
+
+#[no_mangle]
+pub unsafe extern "C" fn fmi2DeSerializeFMUstate(
+    c: fmi2Component,
+    serializedState: *const fmi2Byte,
+    size: usize,
+    state: *mut fmi2FMUstate,
+) -> fmi2Status {
+    call(c, "fmi2DeSerializeFMUstate", |i| {
+        let bytes = slice(
+            serializedState.cast::<u8>(),
+            size,
+            "fmi2DeSerializeFMUstate: buffer",
+        )?;
+        let slot = state
+            .as_mut()
+            .ok_or_else(|| fail("fmi2DeSerializeFMUstate: FMUstate is NULL".into()))?;
+        let snapshot = i.deserialize_state(bytes)?;
+        match (*slot as *mut Snapshot).as_mut() {
+            Some(existing) => *existing = snapshot,
+            None => *slot = Box::into_raw(Box::new(snapshot)) as fmi2FMUstate,
+        }
+        Ok(Status::Ok)
+    })
+}
+
+/// The functions this FMU declares it does not provide: logged errors.
+fn unsupported(c: fmi2Component, name: &str, why: &str) -> fmi2Status {
+    call(c, name, |_| Err(fail(format!("{name}: {why}"))))
+}
+
+#[no_mangle]
+pub unsafe extern "C" fn fmi2GetDirectionalDerivative(
+    c: fmi2Component,
+    _vUnknown_ref: *const fmi2ValueReference,
+    _nUnknown: usize,
+    _vKnown_ref: *const fmi2ValueReference,
+    _nKnown: usize,
+    _dvKnown: *const fmi2Real,
+    _dvUnknown: *mut fmi2Real,
+) -> fmi2Status {
+    unsupported(
+        c,
+        "fmi2GetDirectionalDerivative",
+        "not provided (providesDirectionalDerivative=false)",
+    )
+}
+
+#[no_mangle]
+pub unsafe extern "C" fn fmi2SetRealInputDerivatives(
+    c: fmi2Component,
+    _vr: *const fmi2ValueReference,
+    _nvr: usize,
+    _order: *const fmi2Integer,
+    _value: *const fmi2Real,
+) -> fmi2Status {
+    unsupported(
+        c,
+        "fmi2SetRealInputDerivatives",
+        "inputs are held constant over a step (canInterpolateInputs=false)",
+    )
+}
+
+#[no_mangle]
+pub unsafe extern "C" fn fmi2GetRealOutputDerivatives(
+    c: fmi2Component,
+    _vr: *const fmi2ValueReference,
+    _nvr: usize,
+    _order: *const fmi2Integer,
+    _value: *mut fmi2Real,
+) -> fmi2Status {
+    unsupported(
+        c,
+        "fmi2GetRealOutputDerivatives",
+        "not provided (maxOutputDerivativeOrder=0)",
+    )
+}
+
+#[no_mangle]
+pub unsafe extern "C" fn fmi2DoStep(
+    c: fmi2Component,
+    currentCommunicationPoint: fmi2Real,
+    communicationStepSize: fmi2Real,
+    _noSetFMUStatePriorToCurrentPoint: fmi2Boolean,
+) -> fmi2Status {
+    call(c, "fmi2DoStep", |i| {
+        i.do_step(currentCommunicationPoint, communicationStepSize)
+    })
+}
+
+#[no_mangle]
+pub unsafe extern "C" fn fmi2CancelStep(c: fmi2Component) -> fmi2Status {
+    unsupported(
+        c,
+        "fmi2CancelStep",
+        "fmi2DoStep always completes synchronously",
+    )
+}
+
+#[no_mangle]
+pub unsafe extern "C" fn fmi2GetStatus(
+    c: fmi2Component,
+    _s: fmi2StatusKind,
+    _value: *mut fmi2Status,
+) -> fmi2Status {
+    unsupported(
+        c,
+        "fmi2GetStatus",
+        "fmi2DoStep always completes synchronously, so there is no pending status",
+    )
+}
+
+#[no_mangle]
+pub unsafe extern "C" fn fmi2GetRealStatus(
+    c: fmi2Component,
+    s: fmi2StatusKind,
+    value: *mut fmi2Real,
+) -> fmi2Status {
+    call(c, "fmi2GetRealStatus", |i| {
+        if s != fmi2StatusKind_fmi2LastSuccessfulTime {
+            return Err(fail(
+                "fmi2GetRealStatus: only fmi2LastSuccessfulTime is available".into(),
+            ));
+        }
+        let out = value
+            .as_mut()
+            .ok_or_else(|| fail("fmi2GetRealStatus: value is NULL".into()))?;
+        *out = i.last_successful_time()?;
+        Ok(Status::Ok)
+    })
+}
+
+#[no_mangle]
+pub unsafe extern "C" fn fmi2GetIntegerStatus(
+    c: fmi2Component,
+    _s: fmi2StatusKind,
+    _value: *mut fmi2Integer,
+) -> fmi2Status {
+    unsupported(
+        c,
+        "fmi2GetIntegerStatus",
+        "no integer status is defined for co-simulation",
+    )
+}
+
+#[no_mangle]
+pub unsafe extern "C" fn fmi2GetBooleanStatus(
+    c: fmi2Component,
+    s: fmi2StatusKind,
+    value: *mut fmi2Boolean,
+) -> fmi2Status {
+    call(c, "fmi2GetBooleanStatus", |i| {
+        if s != fmi2StatusKind_fmi2Terminated {
+            return Err(fail(
+                "fmi2GetBooleanStatus: only fmi2Terminated is available".into(),
+            ));
+        }
+        let out = value
+            .as_mut()
+            .ok_or_else(|| fail("fmi2GetBooleanStatus: value is NULL".into()))?;
+        *out = fmi2Boolean::from(i.terminated()?);
+        Ok(Status::Ok)
+    })
+}
+
+#[no_mangle]
+pub unsafe extern "C" fn fmi2GetStringStatus(
+    c: fmi2Component,
+    _s: fmi2StatusKind,
+    _value: *mut fmi2String,
+) -> fmi2Status {
+    unsupported(
+        c,
+        "fmi2GetStringStatus",
+        "fmi2DoStep always completes synchronously, so there is no pending status",
+    )
+}
+
+// Each exported signature is checked against the official headers at compile time.
+const _: fmi2GetTypesPlatformTYPE = Some(fmi2GetTypesPlatform);
+const _: fmi2GetVersionTYPE = Some(fmi2GetVersion);
+const _: fmi2SetDebugLoggingTYPE = Some(fmi2SetDebugLogging);
+const _: fmi2InstantiateTYPE = Some(fmi2Instantiate);
+const _: fmi2FreeInstanceTYPE = Some(fmi2FreeInstance);
+const _: fmi2SetupExperimentTYPE = Some(fmi2SetupExperiment);
+const _: fmi2EnterInitializationModeTYPE = Some(fmi2EnterInitializationMode);
+const _: fmi2ExitInitializationModeTYPE = Some(fmi2ExitInitializationMode);
+const _: fmi2TerminateTYPE = Some(fmi2Terminate);
+const _: fmi2ResetTYPE = Some(fmi2Reset);
+const _: fmi2GetRealTYPE = Some(fmi2GetReal);
+const _: fmi2GetIntegerTYPE = Some(fmi2GetInteger);
+const _: fmi2GetBooleanTYPE = Some(fmi2GetBoolean);
+const _: fmi2GetStringTYPE = Some(fmi2GetString);
+const _: fmi2SetRealTYPE = Some(fmi2SetReal);
+const _: fmi2SetIntegerTYPE = Some(fmi2SetInteger);
+const _: fmi2SetBooleanTYPE = Some(fmi2SetBoolean);
+const _: fmi2SetStringTYPE = Some(fmi2SetString);
+const _: fmi2GetFMUstateTYPE = Some(fmi2GetFMUstate);
+const _: fmi2SetFMUstateTYPE = Some(fmi2SetFMUstate);
+const _: fmi2FreeFMUstateTYPE = Some(fmi2FreeFMUstate);
+const _: fmi2SerializedFMUstateSizeTYPE = Some(fmi2SerializedFMUstateSize);
+const _: fmi2SerializeFMUstateTYPE = Some(fmi2SerializeFMUstate);
+const _: fmi2DeSerializeFMUstateTYPE = Some(fmi2DeSerializeFMUstate);
+const _: fmi2GetDirectionalDerivativeTYPE = Some(fmi2GetDirectionalDerivative);
+const _: fmi2SetRealInputDerivativesTYPE = Some(fmi2SetRealInputDerivatives);
+const _: fmi2GetRealOutputDerivativesTYPE = Some(fmi2GetRealOutputDerivatives);
+const _: fmi2DoStepTYPE = Some(fmi2DoStep);
+const _: fmi2CancelStepTYPE = Some(fmi2CancelStep);
+const _: fmi2GetStatusTYPE = Some(fmi2GetStatus);
+const _: fmi2GetRealStatusTYPE = Some(fmi2GetRealStatus);
+const _: fmi2GetIntegerStatusTYPE = Some(fmi2GetIntegerStatus);
+const _: fmi2GetBooleanStatusTYPE = Some(fmi2GetBooleanStatus);
+const _: fmi2GetStringStatusTYPE = Some(fmi2GetStringStatus);

@@ -1,0 +1,529 @@
+//! A safe FMI 2.0 co-simulation instance: the state machine, get/set through the variable
+//! table, `DoStep`, and FMU state snapshots. It holds no C types; the `extern "C"` layer
+//! in `fmu/` converts arguments, calls these methods and maps their results to
+//! `fmi2Status`. Messages are queued here and forwarded to the importer's logger there.
+
+use std::path::Path;
+
+use super::snapshot::Snapshot;
+use super::variables::{BaseType, Binding, VariableTable};
+use super::{guid_for, Category, Message, Mode, Status};
+use crate::model::Model;
+use crate::scene::Scene;
+use crate::sim::Simulation;
+
+/// A failed call: what the importer is told.
+#[derive(Debug, Clone, PartialEq)]
+pub struct FmiError {
+    /// `Error` or `Discard`.
+    pub status: Status,
+    /// The message, naming the call and the reason.
+    pub message: String,
+}
+
+/// Result of an instance method: the status to return on success.
+pub type FmiResult<T = Status> = Result<T, FmiError>;
+
+fn error(message: impl Into<String>) -> FmiError {
+    FmiError {
+        status: Status::Error,
+        message: message.into(),
+    }
+}
+
+/// Everything that `Reset` restores.
+#[derive(Clone)]
+pub(super) struct Core {
+    pub(super) scene: Scene,
+    pub(super) sim: Simulation,
+    pub(super) table: VariableTable,
+    pub(super) mode: Mode,
+    pub(super) time: f64,
+    pub(super) stop_time: Option<f64>,
+    pub(super) rebuild: bool,
+    pub(super) stale: bool,
+    pub(super) warned_negative: Vec<bool>,
+}
+
+/// One FMU instance.
+pub struct Instance {
+    name: String,
+    guid: String,
+    core: Core,
+    fresh: Core,
+    logging: [bool; 3],
+    messages: Vec<Message>,
+}
+
+/// Tolerance for matching a communication point with the current time.
+fn time_tolerance(t: f64) -> f64 {
+    1e-9 * t.abs().max(1.0)
+}
+
+impl Instance {
+    /// `fmi2Instantiate`: reads `resources/scene.toml`, checks the GUID, builds the model.
+    pub fn instantiate(
+        name: &str,
+        guid: &str,
+        resources: &Path,
+        logging_on: bool,
+    ) -> Result<Self, String> {
+        if name.is_empty() {
+            return Err("fmi2Instantiate: instanceName is empty".into());
+        }
+        let path = resources.join("scene.toml");
+        let text = std::fs::read_to_string(&path).map_err(|e| {
+            format!(
+                "fmi2Instantiate: cannot read the scene {}: {e}",
+                path.display()
+            )
+        })?;
+        let expected = guid_for(&text);
+        if guid != expected {
+            return Err(format!(
+                "fmi2Instantiate: GUID mismatch: the importer passed {guid} but this binary and \
+                 scene give {expected} (modelDescription.xml, binary and resources do not belong together)"
+            ));
+        }
+        let scene = Scene::from_toml_str(&text).map_err(|e| format!("fmi2Instantiate: {e}"))?;
+        let model = Model::new(&scene).map_err(|e| format!("fmi2Instantiate: scene: {e}"))?;
+        let sim = Simulation::new(model);
+        let core = Core {
+            scene: sim.model().explicit_scene(),
+            table: VariableTable::new(&sim),
+            warned_negative: vec![false; sim.model().controlled.len()],
+            sim,
+            mode: Mode::Instantiated,
+            time: 0.0,
+            stop_time: None,
+            rebuild: false,
+            stale: false,
+        };
+        let mut instance = Self {
+            name: name.to_string(),
+            guid: expected,
+            fresh: core.clone(),
+            core,
+            logging: [logging_on; 3],
+            messages: Vec::new(),
+        };
+        for w in instance.core.sim.warnings().to_vec() {
+            instance.log(Category::Warning, format!("scene: {w}"));
+        }
+        Ok(instance)
+    }
+
+    /// The instance name.
+    pub fn name(&self) -> &str {
+        &self.name
+    }
+
+    /// The current mode.
+    pub fn mode(&self) -> Mode {
+        self.core.mode
+    }
+
+    /// The variable table.
+    pub fn table(&self) -> &VariableTable {
+        &self.core.table
+    }
+
+    /// The simulation (read-only).
+    pub fn simulation(&self) -> &Simulation {
+        &self.core.sim
+    }
+
+    /// Queued messages for the logger, with their categories.
+    pub fn drain_messages(&mut self) -> Vec<Message> {
+        std::mem::take(&mut self.messages)
+    }
+
+    /// Queues a message if its category is enabled.
+    pub fn log(&mut self, category: Category, text: impl Into<String>) {
+        if self.logging[category as usize] {
+            self.messages.push(Message {
+                category,
+                text: text.into(),
+            });
+        }
+    }
+
+    /// Records a failed call: logs it and, for an error, enters the Error mode.
+    pub fn fail(&mut self, err: &FmiError) {
+        if err.status == Status::Error {
+            self.core.mode = Mode::Error;
+        }
+        self.log(Category::Error, err.message.clone());
+    }
+
+    /// `fmi2SetDebugLogging`; an empty list means every category.
+    pub fn set_debug_logging(&mut self, on: bool, categories: &[String]) -> FmiResult {
+        if categories.is_empty() {
+            self.logging = [on; 3];
+            return Ok(Status::Ok);
+        }
+        for c in categories {
+            let category = Category::from_name(c).ok_or_else(|| {
+                error(format!(
+                    "fmi2SetDebugLogging: unknown log category '{c}' (known: {})",
+                    Category::ALL.map(Category::name).join(", ")
+                ))
+            })?;
+            self.logging[category as usize] = on;
+        }
+        Ok(Status::Ok)
+    }
+
+    fn require(&self, call: &str, allowed: &[Mode]) -> FmiResult<()> {
+        if allowed.contains(&self.core.mode) {
+            Ok(())
+        } else {
+            Err(error(format!(
+                "{call}: illegal call sequence: not allowed in mode {:?}",
+                self.core.mode
+            )))
+        }
+    }
+
+    /// `fmi2SetupExperiment`.
+    pub fn setup_experiment(&mut self, start: f64, stop: Option<f64>) -> FmiResult {
+        self.require("fmi2SetupExperiment", &[Mode::Instantiated])?;
+        if !start.is_finite() || stop.is_some_and(|s| !(s.is_finite() && s >= start)) {
+            return Err(error(format!(
+                "fmi2SetupExperiment: start time {start} and stop time {stop:?} must be finite with stop ≥ start"
+            )));
+        }
+        self.core.time = start;
+        self.core.sim.set_time(start);
+        self.core.stop_time = stop;
+        Ok(Status::Ok)
+    }
+
+    /// `fmi2EnterInitializationMode`.
+    pub fn enter_initialization_mode(&mut self) -> FmiResult {
+        self.require("fmi2EnterInitializationMode", &[Mode::Instantiated])?;
+        self.core.mode = Mode::InitializationMode;
+        Ok(Status::Ok)
+    }
+
+    /// `fmi2ExitInitializationMode`: rebuilds the model if parameters changed.
+    pub fn exit_initialization_mode(&mut self) -> FmiResult {
+        self.require("fmi2ExitInitializationMode", &[Mode::InitializationMode])?;
+        self.rebuild_if_needed("fmi2ExitInitializationMode")?;
+        self.core.mode = Mode::StepComplete;
+        Ok(Status::Ok)
+    }
+
+    /// `fmi2Terminate`.
+    pub fn terminate(&mut self) -> FmiResult {
+        self.require("fmi2Terminate", &[Mode::StepComplete])?;
+        self.core.mode = Mode::Terminated;
+        Ok(Status::Ok)
+    }
+
+    /// `fmi2Reset`: exactly the post-instantiate state.
+    pub fn reset(&mut self) -> FmiResult {
+        self.core = self.fresh.clone();
+        Ok(Status::Ok)
+    }
+
+    fn rebuild_if_needed(&mut self, call: &str) -> FmiResult<()> {
+        if !self.core.rebuild {
+            return Ok(());
+        }
+        let model =
+            Model::new(&self.core.scene).map_err(|e| error(format!("{call}: parameters: {e}")))?;
+        let inputs = self.core.sim.inputs.clone();
+        let time = self.core.time;
+        self.core.sim = Simulation::new(model);
+        self.core.sim.inputs = inputs;
+        self.core.sim.set_time(time);
+        self.core.rebuild = false;
+        self.core.stale = true;
+        Ok(())
+    }
+
+    fn refresh_outputs(&mut self, call: &str) -> FmiResult<()> {
+        self.rebuild_if_needed(call)?;
+        if self.core.stale {
+            self.core.sim.refresh();
+            self.core.stale = false;
+        }
+        Ok(())
+    }
+
+    fn lookup(&self, call: &str, vr: u32, expected: BaseType) -> FmiResult<Binding> {
+        let v = self
+            .core
+            .table
+            .get(vr)
+            .ok_or_else(|| error(format!("{call}: unknown value reference {vr}")))?;
+        if v.base_type != expected {
+            return Err(error(format!(
+                "{call}: value reference {vr} ({}) is not of this type",
+                v.name
+            )));
+        }
+        Ok(v.binding)
+    }
+
+    /// `fmi2GetReal` / `fmi2GetBoolean` (Booleans as 0/1).
+    pub fn get(
+        &mut self,
+        call: &str,
+        base: BaseType,
+        vrs: &[u32],
+        values: &mut [f64],
+    ) -> FmiResult {
+        self.require(
+            call,
+            &[
+                Mode::InitializationMode,
+                Mode::StepComplete,
+                Mode::Terminated,
+                Mode::Error,
+            ],
+        )?;
+        self.refresh_outputs(call)?;
+        for (vr, value) in vrs.iter().zip(values.iter_mut()) {
+            let binding = self.lookup(call, *vr, base)?;
+            *value = self.read(binding);
+        }
+        Ok(Status::Ok)
+    }
+
+    fn read(&self, binding: Binding) -> f64 {
+        let core = &self.core;
+        let sim = &core.sim;
+        match binding {
+            Binding::Output(q) => q.value(sim),
+            Binding::ForceDensity(k) => sim.inputs.force_density[k],
+            Binding::NodeForce(k, axis) => sim.inputs.node_force[k][axis],
+            Binding::StepSize => core.scene.solver.step_size,
+            Binding::Correction => f64::from(u8::from(core.scene.solver.correction)),
+            Binding::Stiffness(j) => core.scene.cables[j].stiffness.unwrap_or(0.0),
+            Binding::RestLength(j) => core.scene.cables[j].rest_length.unwrap_or(0.0),
+            Binding::Damping(j) => core.scene.cables[j].damping.unwrap_or(0.0),
+            Binding::Mass(i) => core.scene.bars[i].mass,
+        }
+    }
+
+    /// Get or set of a type this FMU has no variables of (Integer, String): only an
+    /// empty request succeeds.
+    pub fn untyped(&mut self, call: &str, vrs: &[u32]) -> FmiResult {
+        self.require(
+            call,
+            &[
+                Mode::Instantiated,
+                Mode::InitializationMode,
+                Mode::StepComplete,
+                Mode::Terminated,
+                Mode::Error,
+            ],
+        )?;
+        match vrs.first() {
+            None => Ok(Status::Ok),
+            Some(vr) => Err(error(format!(
+                "{call}: value reference {vr} is not a variable of this type (this FMU has only Real and Boolean variables)"
+            ))),
+        }
+    }
+
+    /// `fmi2SetReal` / `fmi2SetBoolean`. Nothing is changed unless every value is accepted.
+    pub fn set(&mut self, call: &str, base: BaseType, vrs: &[u32], values: &[f64]) -> FmiResult {
+        self.require(
+            call,
+            &[
+                Mode::Instantiated,
+                Mode::InitializationMode,
+                Mode::StepComplete,
+            ],
+        )?;
+        let mut next = self.core.clone_for_set();
+        let mut status = Status::Ok;
+        for (vr, &value) in vrs.iter().zip(values) {
+            let binding = self.lookup(call, *vr, base)?;
+            let name = self.core.table.variables[*vr as usize].name.clone();
+            if !value.is_finite() {
+                return Err(error(format!(
+                    "{call}: {name} = {value} is not a finite number"
+                )));
+            }
+            let fixed = !matches!(binding, Binding::ForceDensity(_) | Binding::NodeForce(..));
+            if matches!(binding, Binding::Output(_)) {
+                return Err(error(format!(
+                    "{call}: {name} is an output and cannot be set"
+                )));
+            }
+            if fixed && self.core.mode == Mode::StepComplete {
+                return Err(error(format!(
+                    "{call}: {name} is a fixed parameter and cannot be set after initialization"
+                )));
+            }
+            match binding {
+                Binding::ForceDensity(k) => {
+                    if value < 0.0 && !next.warned_negative[k] {
+                        next.warned_negative[k] = true;
+                        status = Status::Warning;
+                        self.log(
+                            Category::Warning,
+                            format!("{call}: {name} = {value} is negative; a cable cannot push, so it acts as 0 (warned once)"),
+                        );
+                    }
+                    next.force_density[k] = value;
+                }
+                Binding::NodeForce(k, axis) => next.node_force[k][axis] = value,
+                _ => {
+                    apply_parameter(&mut next.scene, binding, value);
+                    next.scene
+                        .validate()
+                        .map_err(|e| error(format!("{call}: {name} = {value} rejected: {e}")))?;
+                    next.rebuild = true;
+                }
+            }
+        }
+        self.core.commit_set(next);
+        Ok(status)
+    }
+
+    /// `fmi2DoStep`: internal steps of `solver.step_size` from `t` to `t + h`, the last one
+    /// shortened; on failure the instance is left exactly as before the call.
+    pub fn do_step(&mut self, t: f64, h: f64) -> FmiResult {
+        self.require("fmi2DoStep", &[Mode::StepComplete])?;
+        let now = self.core.time;
+        if !(h > 0.0 && h.is_finite()) {
+            return Err(error(format!(
+                "fmi2DoStep: communicationStepSize must be > 0, got {h}"
+            )));
+        }
+        if !t.is_finite() || (t - now).abs() > time_tolerance(now) {
+            return Err(error(format!(
+                "fmi2DoStep: currentCommunicationPoint {t} does not continue from the last step, which ended at {now}"
+            )));
+        }
+        let end = t + h;
+        if let Some(stop) = self.core.stop_time {
+            if end > stop + time_tolerance(stop) {
+                return Err(error(format!(
+                    "fmi2DoStep: step to {end} goes past the stop time {stop}"
+                )));
+            }
+        }
+        let dt = self.core.scene.solver.step_size;
+        let n = ((h / dt) - 1e-9).ceil().max(1.0) as u64;
+        let before = self.core.sim.state().clone();
+        for k in 0..n {
+            let t0 = t + k as f64 * dt;
+            let t1 = if k + 1 == n {
+                end
+            } else {
+                t + (k + 1) as f64 * dt
+            };
+            if let Err(e) = self.core.sim.step_to(t0, t1) {
+                self.core.sim.set_state(before);
+                return Err(error(format!("fmi2DoStep: {e}")));
+            }
+        }
+        self.core.time = end;
+        self.core.stale = true;
+        Ok(Status::Ok)
+    }
+
+    /// `fmi2GetRealStatus(fmi2LastSuccessfulTime)`.
+    pub fn last_successful_time(&self) -> FmiResult<f64> {
+        self.require(
+            "fmi2GetRealStatus",
+            &[Mode::StepComplete, Mode::Terminated, Mode::Error],
+        )?;
+        Ok(self.core.time)
+    }
+
+    /// `fmi2GetBooleanStatus(fmi2Terminated)`: the FMU never asks to stop early.
+    pub fn terminated(&self) -> FmiResult<bool> {
+        self.require(
+            "fmi2GetBooleanStatus",
+            &[Mode::StepComplete, Mode::Terminated, Mode::Error],
+        )?;
+        Ok(self.core.mode == Mode::Terminated)
+    }
+
+    /// `fmi2GetFMUstate`.
+    pub fn get_state(&self) -> FmiResult<Snapshot> {
+        self.require(
+            "fmi2GetFMUstate",
+            &[
+                Mode::Instantiated,
+                Mode::InitializationMode,
+                Mode::StepComplete,
+                Mode::Terminated,
+            ],
+        )?;
+        Ok(Snapshot::take(&self.guid, &self.core))
+    }
+
+    /// `fmi2SetFMUstate` (also legal after an error, to recover).
+    pub fn set_state(&mut self, snapshot: &Snapshot) -> FmiResult {
+        self.require(
+            "fmi2SetFMUstate",
+            &[
+                Mode::Instantiated,
+                Mode::InitializationMode,
+                Mode::StepComplete,
+                Mode::Terminated,
+                Mode::Error,
+            ],
+        )?;
+        snapshot
+            .restore(&self.guid, &mut self.core)
+            .map_err(|e| error(format!("fmi2SetFMUstate: {e}")))?;
+        Ok(Status::Ok)
+    }
+
+    /// `fmi2DeSerializeFMUstate`.
+    pub fn deserialize_state(&self, bytes: &[u8]) -> FmiResult<Snapshot> {
+        Snapshot::from_bytes(&self.guid, bytes)
+            .map_err(|e| error(format!("fmi2DeSerializeFMUstate: {e}")))
+    }
+}
+
+/// The parts of [`Core`] that a set call may change, applied only if all values pass.
+pub(super) struct PendingSet {
+    scene: Scene,
+    force_density: Vec<f64>,
+    node_force: Vec<nalgebra::Vector3<f64>>,
+    warned_negative: Vec<bool>,
+    rebuild: bool,
+}
+
+impl Core {
+    fn clone_for_set(&self) -> PendingSet {
+        PendingSet {
+            scene: self.scene.clone(),
+            force_density: self.sim.inputs.force_density.clone(),
+            node_force: self.sim.inputs.node_force.clone(),
+            warned_negative: self.warned_negative.clone(),
+            rebuild: self.rebuild,
+        }
+    }
+
+    fn commit_set(&mut self, next: PendingSet) {
+        self.scene = next.scene;
+        self.sim.inputs.force_density = next.force_density;
+        self.sim.inputs.node_force = next.node_force;
+        self.warned_negative = next.warned_negative;
+        self.rebuild = next.rebuild;
+        self.stale = true;
+    }
+}
+
+fn apply_parameter(scene: &mut Scene, binding: Binding, value: f64) {
+    match binding {
+        Binding::StepSize => scene.solver.step_size = value,
+        Binding::Correction => scene.solver.correction = value != 0.0,
+        Binding::Stiffness(j) => scene.cables[j].stiffness = Some(value),
+        Binding::RestLength(j) => scene.cables[j].rest_length = Some(value),
+        Binding::Damping(j) => scene.cables[j].damping = Some(value),
+        Binding::Mass(i) => scene.bars[i].mass = value,
+        Binding::Output(_) | Binding::ForceDensity(_) | Binding::NodeForce(..) => {}
+    }
+}

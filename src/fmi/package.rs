@@ -1,0 +1,68 @@
+//! Writes a `.fmu` archive: modelDescription.xml, the generic binary under the model
+//! identifier, the scene in `resources/` and the documentation.
+
+use std::io::Write;
+use std::path::Path;
+
+use zip::write::SimpleFileOptions;
+
+use super::description::{model_description, model_identifier};
+use super::documentation::index_html;
+use super::guid_for;
+use super::variables::VariableTable;
+use crate::model::Model;
+use crate::scene::Scene;
+use crate::sim::Simulation;
+
+/// What [`build_fmu`] wrote.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Built {
+    /// The GUID in modelDescription.xml.
+    pub guid: String,
+    /// The model identifier (binary name).
+    pub model_identifier: String,
+    /// Number of variables.
+    pub variables: usize,
+}
+
+/// Builds the FMU for `scene` at `out`, with the shared library at `binary`.
+pub fn build_fmu(scene: &Scene, binary: &Path, out: &Path) -> Result<Built, String> {
+    let scene_text = scene.to_toml_string();
+    let model = Model::new(scene).map_err(|e| e.to_string())?;
+    let sim = Simulation::new(model);
+    let table = VariableTable::new(&sim);
+    let guid = guid_for(&scene_text);
+    let description = model_description(sim.model(), &table, &guid);
+    let xml = description
+        .to_xml()
+        .map_err(|e| format!("modelDescription.xml: {e}"))?;
+    let id = model_identifier(sim.model());
+    let so = std::fs::read(binary)
+        .map_err(|e| format!("cannot read the FMU binary {}: {e}", binary.display()))?;
+    let file =
+        std::fs::File::create(out).map_err(|e| format!("cannot create {}: {e}", out.display()))?;
+    let mut zip = zip::ZipWriter::new(file);
+    let options = SimpleFileOptions::default().compression_method(zip::CompressionMethod::Deflated);
+    let html = index_html(sim.model(), &table);
+    let entries: [(String, &[u8]); 4] = [
+        ("modelDescription.xml".into(), xml.as_bytes()),
+        (format!("binaries/linux64/{id}.so"), &so),
+        ("resources/scene.toml".into(), scene_text.as_bytes()),
+        ("documentation/index.html".into(), html.as_bytes()),
+    ];
+    let write =
+        |zip: &mut zip::ZipWriter<std::fs::File>, name: &str, data: &[u8]| -> Result<(), String> {
+            zip.start_file(name, options).map_err(|e| e.to_string())?;
+            zip.write_all(data).map_err(|e| e.to_string())
+        };
+    for (name, data) in &entries {
+        write(&mut zip, name, data)?;
+    }
+    zip.finish()
+        .map_err(|e| format!("writing {}: {e}", out.display()))?;
+    Ok(Built {
+        guid,
+        model_identifier: id,
+        variables: table.variables.len(),
+    })
+}

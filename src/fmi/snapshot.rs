@@ -1,0 +1,250 @@
+//! FMU state snapshots (`fmi2GetFMUstate`) and their serialized form: a magic, a format
+//! version and the GUID, then the state in little-endian fields. A buffer from another
+//! FMU, another version or with a wrong length is rejected.
+
+use nalgebra::Vector3;
+
+use super::instance::Core;
+use super::Mode;
+use crate::model::Model;
+use crate::scene::Scene;
+use crate::sim::{Simulation, State};
+
+const MAGIC: &[u8; 8] = b"TNSGSTAT";
+const VERSION: u32 = 1;
+
+/// Everything needed to return an instance to a point in its history.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Snapshot {
+    guid: String,
+    mode: Mode,
+    time: f64,
+    stop_time: Option<f64>,
+    state: State,
+    force_density: Vec<f64>,
+    node_force: Vec<Vector3<f64>>,
+    warned_negative: Vec<bool>,
+    rebuild: bool,
+    scene: String,
+}
+
+impl Snapshot {
+    pub(super) fn take(guid: &str, core: &Core) -> Self {
+        Self {
+            guid: guid.to_string(),
+            mode: core.mode,
+            time: core.time,
+            stop_time: core.stop_time,
+            state: core.sim.state().clone(),
+            force_density: core.sim.inputs.force_density.clone(),
+            node_force: core.sim.inputs.node_force.clone(),
+            warned_negative: core.warned_negative.clone(),
+            rebuild: core.rebuild,
+            scene: core.scene.to_toml_string(),
+        }
+    }
+
+    pub(super) fn restore(&self, guid: &str, core: &mut Core) -> Result<(), String> {
+        if self.guid != guid {
+            return Err(format!(
+                "the state belongs to another FMU (GUID {})",
+                self.guid
+            ));
+        }
+        let scene = Scene::from_toml_str(&self.scene).map_err(|e| e.to_string())?;
+        let mut sim = if scene == core.scene {
+            core.sim.clone()
+        } else {
+            Simulation::new(Model::new(&scene).map_err(|e| e.to_string())?)
+        };
+        let sizes_match = self.state.y.len() == sim.state().y.len()
+            && self.force_density.len() == sim.inputs.force_density.len()
+            && self.node_force.len() == sim.inputs.node_force.len()
+            && self.warned_negative.len() == core.warned_negative.len();
+        if !sizes_match {
+            return Err("the state does not match this FMU's structure".into());
+        }
+        sim.inputs.force_density = self.force_density.clone();
+        sim.inputs.node_force = self.node_force.clone();
+        sim.set_state(self.state.clone());
+        core.sim = sim;
+        core.scene = scene;
+        core.mode = self.mode;
+        core.time = self.time;
+        core.stop_time = self.stop_time;
+        core.warned_negative = self.warned_negative.clone();
+        core.rebuild = self.rebuild;
+        core.stale = false;
+        Ok(())
+    }
+
+    /// The serialized form.
+    pub fn to_bytes(&self) -> Vec<u8> {
+        let mut out = Vec::new();
+        out.extend_from_slice(MAGIC);
+        out.extend_from_slice(&VERSION.to_le_bytes());
+        put_bytes(&mut out, self.guid.as_bytes());
+        out.push(mode_code(self.mode));
+        put_f64s(&mut out, &[self.time, self.state.time]);
+        out.push(u8::from(self.stop_time.is_some()));
+        put_f64s(&mut out, &[self.stop_time.unwrap_or(0.0)]);
+        put_len(&mut out, self.state.y.len());
+        put_f64s(&mut out, &self.state.y);
+        put_len(&mut out, self.force_density.len());
+        put_f64s(&mut out, &self.force_density);
+        put_len(&mut out, self.node_force.len());
+        for f in &self.node_force {
+            put_f64s(&mut out, f.as_slice());
+        }
+        put_bytes(
+            &mut out,
+            &self
+                .warned_negative
+                .iter()
+                .map(|&w| u8::from(w))
+                .collect::<Vec<_>>(),
+        );
+        out.push(u8::from(self.rebuild));
+        put_bytes(&mut out, self.scene.as_bytes());
+        out
+    }
+
+    /// Parses a serialized state, checking magic, version and GUID.
+    pub fn from_bytes(guid: &str, bytes: &[u8]) -> Result<Self, String> {
+        let mut r = Reader { bytes, at: 0 };
+        if r.take(MAGIC.len())? != MAGIC {
+            return Err("not a serialized tensegrity-fmu state (bad magic)".into());
+        }
+        let version = u32::from_le_bytes(r.take(4)?.try_into().expect("4 bytes"));
+        if version != VERSION {
+            return Err(format!(
+                "serialized state version {version}, expected {VERSION}"
+            ));
+        }
+        let found =
+            String::from_utf8(r.bytes()?.to_vec()).map_err(|_| "corrupt GUID".to_string())?;
+        if found != guid {
+            return Err(format!(
+                "the state belongs to another FMU (GUID {found}, expected {guid})"
+            ));
+        }
+        let mode = mode_from(r.u8()?)?;
+        let time = r.f64()?;
+        let state_time = r.f64()?;
+        let has_stop = r.u8()? != 0;
+        let stop = r.f64()?;
+        let n = r.len()?;
+        let y = r.f64s(n)?;
+        let n = r.len()?;
+        let force_density = r.f64s(n)?;
+        let n = r.len()?;
+        let node_force = (0..n)
+            .map(|_| Ok(Vector3::new(r.f64()?, r.f64()?, r.f64()?)))
+            .collect::<Result<Vec<_>, String>>()?;
+        let warned_negative = r.bytes()?.iter().map(|&b| b != 0).collect();
+        let rebuild = r.u8()? != 0;
+        let scene =
+            String::from_utf8(r.bytes()?.to_vec()).map_err(|_| "corrupt scene".to_string())?;
+        if r.at != bytes.len() {
+            return Err("trailing bytes after the serialized state".into());
+        }
+        let finite = [time, state_time, stop]
+            .iter()
+            .chain(&y)
+            .chain(&force_density)
+            .all(|x| x.is_finite())
+            && node_force.iter().all(|f| f.iter().all(|x| x.is_finite()));
+        if !finite {
+            return Err("corrupt state: non-finite values".into());
+        }
+        Ok(Self {
+            guid: found,
+            mode,
+            time,
+            stop_time: has_stop.then_some(stop),
+            state: State {
+                time: state_time,
+                y,
+            },
+            force_density,
+            node_force,
+            warned_negative,
+            rebuild,
+            scene,
+        })
+    }
+}
+
+fn mode_code(mode: Mode) -> u8 {
+    match mode {
+        Mode::Instantiated => 0,
+        Mode::InitializationMode => 1,
+        Mode::StepComplete => 2,
+        Mode::Terminated => 3,
+        Mode::Error => 4,
+    }
+}
+
+fn mode_from(code: u8) -> Result<Mode, String> {
+    Ok(match code {
+        0 => Mode::Instantiated,
+        1 => Mode::InitializationMode,
+        2 => Mode::StepComplete,
+        3 => Mode::Terminated,
+        4 => Mode::Error,
+        _ => return Err(format!("corrupt state: mode code {code}")),
+    })
+}
+
+fn put_len(out: &mut Vec<u8>, n: usize) {
+    out.extend_from_slice(&(n as u64).to_le_bytes());
+}
+
+fn put_bytes(out: &mut Vec<u8>, b: &[u8]) {
+    put_len(out, b.len());
+    out.extend_from_slice(b);
+}
+
+fn put_f64s(out: &mut Vec<u8>, xs: &[f64]) {
+    for x in xs {
+        out.extend_from_slice(&x.to_le_bytes());
+    }
+}
+
+struct Reader<'a> {
+    bytes: &'a [u8],
+    at: usize,
+}
+
+impl<'a> Reader<'a> {
+    fn take(&mut self, n: usize) -> Result<&'a [u8], String> {
+        let end = self.at.checked_add(n).filter(|&e| e <= self.bytes.len());
+        let end = end.ok_or("truncated serialized state")?;
+        let slice = &self.bytes[self.at..end];
+        self.at = end;
+        Ok(slice)
+    }
+    fn u8(&mut self) -> Result<u8, String> {
+        Ok(self.take(1)?[0])
+    }
+    fn len(&mut self) -> Result<usize, String> {
+        let n = u64::from_le_bytes(self.take(8)?.try_into().expect("8 bytes"));
+        usize::try_from(n).map_err(|_| "corrupt length".to_string())
+    }
+    fn f64(&mut self) -> Result<f64, String> {
+        Ok(f64::from_le_bytes(
+            self.take(8)?.try_into().expect("8 bytes"),
+        ))
+    }
+    fn f64s(&mut self, n: usize) -> Result<Vec<f64>, String> {
+        let bytes = self.take(n.checked_mul(8).ok_or("corrupt length")?)?;
+        Ok(bytes
+            .chunks_exact(8)
+            .map(|c| f64::from_le_bytes(c.try_into().expect("8 bytes")))
+            .collect())
+    }
+    fn bytes(&mut self) -> Result<&'a [u8], String> {
+        let n = self.len()?;
+        self.take(n)
+    }
+}

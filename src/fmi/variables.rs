@@ -1,0 +1,255 @@
+//! The single variable table of an FMU, built from the model. It drives get/set in the
+//! instance and the `ModelVariables` of modelDescription.xml, so the two cannot drift.
+//! A variable exists only where the scene calls for it.
+
+use fmi2_model_description::{Causality, Initial, Variability};
+
+use crate::model::{CableLaw, Model};
+use crate::outputs::{self, Quantity};
+use crate::sim::Simulation;
+
+/// What a variable reads or writes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Binding {
+    /// A computed output.
+    Output(Quantity),
+    /// Force density input of controlled cable input `k`.
+    ForceDensity(usize),
+    /// Force input `k` (node in `force_inputs` order), axis 0..3.
+    NodeForce(usize, usize),
+    /// `solver.step_size`.
+    StepSize,
+    /// `solver.correction`.
+    Correction,
+    /// Stiffness of elastic cable `j`.
+    Stiffness(usize),
+    /// Rest length of elastic cable `j`.
+    RestLength(usize),
+    /// Damping of elastic cable `j`.
+    Damping(usize),
+    /// Mass of bar `i`.
+    Mass(usize),
+}
+
+/// FMI base type of a variable.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum BaseType {
+    /// `fmi2Real`.
+    Real,
+    /// `fmi2Boolean`.
+    Boolean,
+}
+
+/// One FMU variable.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Variable {
+    /// Structured name, 1-based indices.
+    pub name: String,
+    /// Value reference (the index in the table).
+    pub value_reference: u32,
+    /// Real or Boolean.
+    pub base_type: BaseType,
+    /// FMI causality.
+    pub causality: Causality,
+    /// FMI variability.
+    pub variability: Variability,
+    /// FMI initial, where the combination needs one.
+    pub initial: Option<Initial>,
+    /// Unit symbol (declared in UnitDefinitions).
+    pub unit: Option<&'static str>,
+    /// Meaning.
+    pub description: String,
+    /// Start value (Booleans as 0/1); `None` for calculated outputs.
+    pub start: Option<f64>,
+    /// What it reads or writes.
+    pub binding: Binding,
+}
+
+/// Every variable of an FMU, indexed by value reference.
+#[derive(Debug, Clone, PartialEq)]
+pub struct VariableTable {
+    /// Variables; `variables[vr]` has value reference `vr`.
+    pub variables: Vec<Variable>,
+}
+
+/// Units used by the table, with their SI base-unit exponents `(kg, m, s)`.
+pub const UNITS: [(&str, [i32; 3]); 9] = [
+    ("m", [0, 1, 0]),
+    ("m/s", [0, 1, -1]),
+    ("m2/s", [0, 2, -1]),
+    ("N", [1, 1, -2]),
+    ("N/m", [1, 0, -2]),
+    ("N.s/m", [1, 0, -1]),
+    ("kg", [1, 0, 0]),
+    ("s", [0, 0, 1]),
+    ("J", [1, 2, -2]),
+];
+
+impl VariableTable {
+    /// Builds the table for a simulation's model (start values from its current inputs).
+    pub fn new(sim: &Simulation) -> Self {
+        let model = sim.model();
+        let mut vars = Vec::new();
+        parameters(model, &mut vars);
+        inputs(model, &mut vars);
+        for o in outputs::outputs(sim) {
+            vars.push(Variable {
+                name: o.name,
+                value_reference: 0,
+                base_type: BaseType::Real,
+                causality: Causality::Output,
+                variability: Variability::Continuous,
+                initial: Some(Initial::Calculated),
+                unit: Some(o.unit),
+                description: o.description,
+                start: None,
+                binding: Binding::Output(o.quantity),
+            });
+        }
+        for (vr, v) in vars.iter_mut().enumerate() {
+            v.value_reference = vr as u32;
+        }
+        Self { variables: vars }
+    }
+
+    /// The variable with value reference `vr`.
+    pub fn get(&self, vr: u32) -> Option<&Variable> {
+        self.variables.get(vr as usize)
+    }
+
+    /// The variable called `name`.
+    pub fn by_name(&self, name: &str) -> Option<&Variable> {
+        self.variables.iter().find(|v| v.name == name)
+    }
+}
+
+fn parameter(
+    name: String,
+    unit: Option<&'static str>,
+    description: String,
+    start: f64,
+    binding: Binding,
+) -> Variable {
+    Variable {
+        name,
+        value_reference: 0,
+        base_type: if binding == Binding::Correction {
+            BaseType::Boolean
+        } else {
+            BaseType::Real
+        },
+        causality: Causality::Parameter,
+        variability: Variability::Fixed,
+        initial: Some(Initial::Exact),
+        unit,
+        description,
+        start: Some(start),
+        binding,
+    }
+}
+
+fn parameters(model: &Model, vars: &mut Vec<Variable>) {
+    vars.push(parameter(
+        "solver.step_size".into(),
+        Some("s"),
+        "internal integration step (the last step of a communication interval is shortened to meet it)".into(),
+        model.solver.step_size,
+        Binding::StepSize,
+    ));
+    vars.push(parameter(
+        "solver.correction".into(),
+        None,
+        "apply the exact bar-length and orthogonality correction after every internal step".into(),
+        f64::from(u8::from(model.solver.correction)),
+        Binding::Correction,
+    ));
+    for (j, cable) in model.cables.iter().enumerate() {
+        if let CableLaw::Elastic {
+            stiffness,
+            rest_length,
+            damping,
+        } = cable.law
+        {
+            let c = j + 1;
+            vars.push(parameter(
+                format!("cable[{c}].stiffness"),
+                Some("N/m"),
+                format!("stiffness of elastic cable {c}"),
+                stiffness,
+                Binding::Stiffness(j),
+            ));
+            vars.push(parameter(
+                format!("cable[{c}].rest_length"),
+                Some("m"),
+                format!("rest length of elastic cable {c}"),
+                rest_length,
+                Binding::RestLength(j),
+            ));
+            if let Some(d) = damping {
+                vars.push(parameter(
+                    format!("cable[{c}].damping"),
+                    Some("N.s/m"),
+                    format!("damping of cable {c} on its extension rate, while taut"),
+                    d,
+                    Binding::Damping(j),
+                ));
+            }
+        }
+    }
+    for (i, bar) in model.bars.iter().enumerate() {
+        vars.push(parameter(
+            format!("bar[{}].mass", i + 1),
+            Some("kg"),
+            format!("mass of bar {} (thin uniform rod)", i + 1),
+            bar.mass,
+            Binding::Mass(i),
+        ));
+    }
+}
+
+fn input(
+    name: String,
+    unit: &'static str,
+    description: String,
+    start: f64,
+    binding: Binding,
+) -> Variable {
+    Variable {
+        name,
+        value_reference: 0,
+        base_type: BaseType::Real,
+        causality: Causality::Input,
+        variability: Variability::Continuous,
+        initial: None,
+        unit: Some(unit),
+        description,
+        start: Some(start),
+        binding,
+    }
+}
+
+fn inputs(model: &Model, vars: &mut Vec<Variable>) {
+    for (k, &j) in model.controlled.iter().enumerate() {
+        vars.push(input(
+            format!("cable[{}].force_density", j + 1),
+            "N/m",
+            format!(
+                "commanded force density of cable {} (tension / length; negative values act as 0)",
+                j + 1
+            ),
+            model.controlled_start[k],
+            Binding::ForceDensity(k),
+        ));
+    }
+    for (k, &n) in model.force_inputs.iter().enumerate() {
+        for (axis, name) in ["fx", "fy", "fz"].iter().enumerate() {
+            vars.push(input(
+                format!("node[{}].{name}", n + 1),
+                "N",
+                format!("external force on node {} along {}", n + 1, &name[1..]),
+                0.0,
+                Binding::NodeForce(k, axis),
+            ));
+        }
+    }
+}
