@@ -1,0 +1,13 @@
+#!/usr/bin/env bash
+# Builds the default FMU (the embedded prism2 scene) and runs it with fmpy.
+set -euo pipefail
+cd "$(dirname "${BASH_SOURCE[0]}")/.."
+bash tests/setup.sh
+cargo build --release --workspace
+fmu=$(./target/release/tensegrity-fmu build -o prism2.fmu)
+echo "== built $fmu"
+.venv/bin/fmpy info "$fmu" | head -20
+.venv/bin/fmpy simulate "$fmu" --output-file prism2-out.csv \
+  --output-variables node[7].x node[7].z cable[1].tension constraint.length_error energy.total
+echo "== wrote prism2-out.csv:"
+head -3 prism2-out.csv; echo "..."; tail -1 prism2-out.csv

@@ -1,0 +1,18 @@
+#!/usr/bin/env bash
+# Installs what the build and the tests need: libclang (bindgen in fmi-sys) and a Python
+# venv with the packages in tests/requirements.txt. Safe to run again.
+set -euo pipefail
+cd "$(dirname "${BASH_SOURCE[0]}")/.."
+
+if ! dpkg -s libclang-dev >/dev/null 2>&1; then
+  echo "== installing libclang-dev (needed by fmi-sys's bindgen)"
+  SUDO=""; [ "$(id -u)" -eq 0 ] || SUDO="sudo"
+  $SUDO apt-get update -qq
+  DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq libclang-dev >/dev/null
+fi
+
+if [ ! -x .venv/bin/python ]; then
+  echo "== creating .venv"
+  python3 -m venv .venv
+fi
+.venv/bin/pip install -q --disable-pip-version-check -r tests/requirements.txt
