@@ -5,6 +5,7 @@
 //! M is block diagonal per bar, so end accelerations follow from the inverse block
 //! `[4 −2; −2 4]/m`. Ω enters λ through the end forces and comes from `N̈ P = 0`.
 
+mod block_cholesky;
 pub mod energy;
 pub mod reactions;
 

@@ -6,18 +6,16 @@
 //! constraint columns share a bar. Its pattern is fixed by the topology: the sparse
 //! solver factors it symbolically once and numerically every evaluation.
 
-use nalgebra::{DMatrix, DVector, Vector3};
-use nalgebra_sparse::factorization::CscCholesky;
-use nalgebra_sparse::pattern::SparsityPattern;
-use nalgebra_sparse::CscMatrix;
+use nalgebra::{DMatrix, DVector, Matrix3, Vector3};
 
+use super::block_cholesky::BlockCholesky;
 use crate::model::coords::Coordinates;
 
 /// One bar's contribution to a 3 × 3 block of K.
 #[derive(Debug, Clone)]
 struct Contribution {
-    /// Storage index of block entry (0, j) for j = 0..3; entry (i, j) is `slot[j] + i`.
-    slot: [usize; 3],
+    /// Sparse: index into the block values; dense: offset of the block's (0, 0) entry.
+    slot: usize,
     /// Product of the two constraint coefficients.
     coef: f64,
     /// Both terms at the same end of the bar.
@@ -27,13 +25,10 @@ struct Contribution {
 /// How K is stored and solved.
 #[derive(Debug, Clone)]
 enum Solver {
-    /// Sparse Cholesky with a fixed pattern: linear cost for banded structures.
-    Sparse {
-        pattern: SparsityPattern,
-        cholesky: Option<Box<CscCholesky<f64>>>,
-    },
+    /// Block-sparse Cholesky with a fixed pattern: linear cost for banded structures.
+    Sparse(Box<BlockCholesky>),
     /// Dense SVD with a rank cut: any P, including redundant or indeterminate ones.
-    Dense,
+    Dense(Vec<f64>),
 }
 
 /// The assembled reaction system and its scratch space.
@@ -41,7 +36,6 @@ enum Solver {
 pub struct Reactions {
     n: usize,
     per_bar: Vec<Vec<Contribution>>,
-    values: Vec<f64>,
     solver: Solver,
     /// Right-hand side, then solution Ω (3 per constraint column).
     pub rhs: DVector<f64>,
@@ -61,53 +55,44 @@ impl Reactions {
                 }
             }
         }
-        let mut blocks: Vec<(usize, usize)> = touching
-            .iter()
-            .flat_map(|t| t.iter().flat_map(|a| t.iter().map(|b| (a.0, b.0))))
-            .collect();
-        blocks.sort_unstable_by_key(|&(row, col)| (col, row));
-        blocks.dedup();
-        let (solver, slots) = if dense {
-            let slots = blocks
-                .iter()
-                .map(|&(row, col)| block_slot_dense(n, row, col))
-                .collect();
-            (Solver::Dense, slots)
-        } else {
-            let (pattern, slots) = block_pattern(nc, &blocks);
-            let solver = Solver::Sparse {
-                pattern,
-                cholesky: None,
+        // The 3 × 3 blocks are symmetric, so the sparse path keeps the lower ones only.
+        let pairs =
+            |t: &Vec<(usize, f64, usize)>| -> Vec<((usize, f64, usize), (usize, f64, usize))> {
+                t.iter()
+                    .flat_map(|&a| t.iter().map(move |&b| (a, b)))
+                    .filter(|(a, b)| dense || a.0 >= b.0)
+                    .collect()
             };
-            (solver, slots)
+        let solver = if dense {
+            Solver::Dense(vec![0.0; n * n])
+        } else {
+            let lower: Vec<(usize, usize)> = touching
+                .iter()
+                .flat_map(|t| pairs(t))
+                .map(|(a, b)| (a.0, b.0))
+                .collect();
+            Solver::Sparse(Box::new(BlockCholesky::new(nc, &lower)))
         };
-        let slot_of = |row: usize, col: usize| {
-            let k = blocks
-                .binary_search_by_key(&(col, row), |&(r, c)| (c, r))
-                .expect("block is in the pattern");
-            slots[k]
+        let slot = |row: usize, col: usize| match &solver {
+            Solver::Sparse(chol) => chol.k_index(row, col).expect("block is in the pattern"),
+            Solver::Dense(_) => 3 * col * n + 3 * row,
         };
         let per_bar = touching
             .iter()
             .map(|t| {
-                t.iter()
-                    .flat_map(|a| t.iter().map(move |b| (a, b)))
+                pairs(t)
+                    .into_iter()
                     .map(|(a, b)| Contribution {
-                        slot: slot_of(a.0, b.0),
+                        slot: slot(a.0, b.0),
                         coef: a.1 * b.1,
                         same_end: a.2 == b.2,
                     })
                     .collect()
             })
             .collect();
-        let len = match &solver {
-            Solver::Sparse { pattern, .. } => pattern.nnz(),
-            Solver::Dense => n * n,
-        };
         Self {
             n,
             per_bar,
-            values: vec![0.0; len],
             solver,
             rhs: DVector::zeros(n),
         }
@@ -120,18 +105,27 @@ impl Reactions {
 
     /// Assembles K for the current bar directions `u_i = b_i/|b_i|` and masses.
     pub fn assemble(&mut self, units: &[Vector3<f64>], masses: &[f64]) {
-        self.values.iter_mut().for_each(|v| *v = 0.0);
+        match &mut self.solver {
+            Solver::Sparse(chol) => chol.k_values.iter_mut().for_each(|b| *b = Matrix3::zeros()),
+            Solver::Dense(values) => values.iter_mut().for_each(|v| *v = 0.0),
+        }
         for (bar, contributions) in self.per_bar.iter().enumerate() {
             let u = units[bar];
+            let uu = u * u.transpose();
             let inv_m = 1.0 / masses[bar];
             for c in contributions {
                 // Same end: (4I − 3uuᵀ)/m; opposite ends: (−2I + 3uuᵀ)/m.
                 let (alpha, beta) = if c.same_end { (4.0, -3.0) } else { (-2.0, 3.0) };
                 let s = c.coef * inv_m;
-                for j in 0..3 {
-                    for i in 0..3 {
-                        let diag = if i == j { alpha } else { 0.0 };
-                        self.values[c.slot[j] + i] += s * (diag + beta * u[i] * u[j]);
+                let block = (Matrix3::identity() * alpha + uu * beta) * s;
+                match &mut self.solver {
+                    Solver::Sparse(chol) => chol.k_values[c.slot] += block,
+                    Solver::Dense(values) => {
+                        for j in 0..3 {
+                            for i in 0..3 {
+                                values[c.slot + j * self.n + i] += block[(i, j)];
+                            }
+                        }
                     }
                 }
             }
@@ -144,91 +138,38 @@ impl Reactions {
         if self.n == 0 {
             return true;
         }
+        let finite = match &self.solver {
+            Solver::Sparse(chol) => chol
+                .k_values
+                .iter()
+                .all(|b| b.iter().all(|x| x.is_finite())),
+            Solver::Dense(values) => values.iter().all(|x| x.is_finite()),
+        };
         // Non-finite data would stall the factorisations; let the NaN reach the state
         // check, which restores the last good point.
-        if !self
-            .values
-            .iter()
-            .chain(self.rhs.iter())
-            .all(|x| x.is_finite())
-        {
+        if !finite || !self.rhs.iter().all(|x| x.is_finite()) {
             self.rhs.fill(f64::NAN);
             return true;
         }
-        if let Solver::Sparse { pattern, cholesky } = &mut self.solver {
-            let ok = match cholesky {
-                Some(ch) => ch.refactor(&self.values).is_ok(),
-                None => {
-                    let m = CscMatrix::try_from_pattern_and_values(
-                        pattern.clone(),
-                        self.values.clone(),
-                    )
-                    .expect("values match the pattern");
-                    *cholesky = CscCholesky::factor(&m).ok().map(Box::new);
-                    cholesky.is_some()
+        match &mut self.solver {
+            Solver::Sparse(chol) => {
+                if chol.factor() {
+                    chol.solve(&mut self.rhs);
+                    true
+                } else {
+                    solve_dense(chol.dense(), &mut self.rhs);
+                    false
                 }
-            };
-            if ok {
-                let ch = cholesky.as_ref().expect("factored");
-                ch.solve_mut(&mut self.rhs);
-                return true;
             }
-            *cholesky = None;
-            let dense = self.dense_from_sparse();
-            solve_dense(dense, &mut self.rhs);
-            return false;
-        }
-        let k = DMatrix::from_column_slice(self.n, self.n, &self.values);
-        solve_dense(k, &mut self.rhs);
-        true
-    }
-
-    fn dense_from_sparse(&self) -> DMatrix<f64> {
-        let Solver::Sparse { pattern, .. } = &self.solver else {
-            unreachable!("only called on the sparse path")
-        };
-        let mut k = DMatrix::zeros(self.n, self.n);
-        for col in 0..self.n {
-            let range = pattern.major_offsets()[col]..pattern.major_offsets()[col + 1];
-            for p in range {
-                k[(pattern.minor_indices()[p], col)] = self.values[p];
+            Solver::Dense(values) => {
+                solve_dense(
+                    DMatrix::from_column_slice(self.n, self.n, values),
+                    &mut self.rhs,
+                );
+                true
             }
         }
-        k
     }
-
-    /// True if K would use the sparse factor.
-    pub fn is_sparse(&self) -> bool {
-        matches!(self.solver, Solver::Sparse { .. })
-    }
-}
-
-fn block_slot_dense(n: usize, row: usize, col: usize) -> [usize; 3] {
-    [0, 1, 2].map(|j| (3 * col + j) * n + 3 * row)
-}
-
-/// Scalar CSC pattern of full 3 × 3 blocks, and each block's `slot` offsets.
-fn block_pattern(nc: usize, blocks: &[(usize, usize)]) -> (SparsityPattern, Vec<[usize; 3]>) {
-    let mut offsets = vec![0usize; 3 * nc + 1];
-    let mut indices = Vec::new();
-    let mut slots = vec![[0usize; 3]; blocks.len()];
-    let mut k = 0;
-    for col in 0..nc {
-        let start = k;
-        while k < blocks.len() && blocks[k].1 == col {
-            k += 1;
-        }
-        for j in 0..3 {
-            for (b, &(row, _)) in blocks[start..k].iter().enumerate() {
-                slots[start + b][j] = indices.len();
-                indices.extend([3 * row, 3 * row + 1, 3 * row + 2]);
-            }
-            offsets[3 * col + j + 1] = indices.len();
-        }
-    }
-    let pattern = SparsityPattern::try_from_offsets_and_indices(3 * nc, 3 * nc, offsets, indices)
-        .expect("blocks are sorted and unique");
-    (pattern, slots)
 }
 
 /// Minimum-norm solve through the SVD, with the rank cut at round-off.

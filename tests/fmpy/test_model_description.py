@@ -1,0 +1,309 @@
+"""modelDescription.xml, the archive and the documentation of the built FMUs (issue 3, items 5-7)."""
+
+import math
+import xml.etree.ElementTree as ET
+import zipfile
+
+import pytest
+from fmpy.validation import validate_fmu
+
+from conftest import BUILTINS
+
+# A class-3 joint (node 4 is shared by three bars), mixing elastic cables (one damped, one
+# not) with a force-density controlled cable whose start value the scene gives.
+CLASS_K_SCENE = """\
+name = "classk-tripod"
+description = "three bars meeting at one class-3 joint, written by the pytest suite"
+nodes = [[1.0, 0.0, 0.0], [-0.5, 0.8660254037844386, 0.0], [-0.5, -0.8660254037844386, 0.0], [0.0, 0.0, 1.0]]
+force_inputs = [4]
+
+[[bars]]
+nodes = [1, 4]
+mass = 1.0
+
+[[bars]]
+nodes = [2, 4]
+mass = 1.5
+
+[[bars]]
+nodes = [3, 4]
+mass = 2.0
+
+[[cables]]
+nodes = [1, 2]
+stiffness = 100.0
+rest_length = 1.6
+
+[[cables]]
+nodes = [2, 3]
+control = "force_density"
+force_density = 3.25
+
+[[cables]]
+nodes = [3, 1]
+stiffness = 120.0
+rest_length = 1.55
+damping = 2.5
+
+[solver]
+step_size = 0.0005
+correction = false
+"""
+
+# SI base-unit exponents (kg, m, s) of every unit the issue asks for.
+UNITS = {
+    "m": (0, 1, 0),
+    "m/s": (0, 1, -1),
+    "N": (1, 1, -2),
+    "N/m": (1, 0, -2),
+    "kg": (1, 0, 0),
+    "s": (0, 0, 1),
+    "J": (1, 2, -2),
+}
+
+
+def expected_variables(scene):
+    """name -> (causality, unit) for every variable issue 3 asks for, from the scene alone."""
+    out = {}
+    n_nodes = len(scene["nodes"])
+    for i in range(1, n_nodes + 1):
+        for c in "xyz":
+            out[f"node[{i}].{c}"] = ("output", "m")
+            out[f"node[{i}].v{c}"] = ("output", "m/s")
+    for j, cable in enumerate(scene.get("cables", []), start=1):
+        out[f"cable[{j}].tension"] = ("output", "N")
+        if cable.get("control") == "force_density":
+            out[f"cable[{j}].force_density"] = ("input", "N/m")
+        else:
+            out[f"cable[{j}].stiffness"] = ("parameter", "N/m")
+            out[f"cable[{j}].rest_length"] = ("parameter", "m")
+            if "damping" in cable:
+                out[f"cable[{j}].damping"] = ("parameter", "N.s/m")
+    for k in range(1, len(scene["bars"]) + 1):
+        out[f"bar[{k}].force"] = ("output", "N")
+        out[f"bar[{k}].mass"] = ("parameter", "kg")
+    for i in scene.get("force_inputs", []):
+        for c in "xyz":
+            out[f"node[{i}].f{c}"] = ("input", "N")
+    out["constraint.length_error"] = ("output", "m")
+    out["constraint.orthogonality_error"] = ("output", "m2/s")
+    out["energy.total"] = ("output", "J")
+    out["solver.step_size"] = ("parameter", "s")
+    out["solver.correction"] = ("parameter", None)
+    return out
+
+
+@pytest.fixture(params=BUILTINS)
+def builtin(request, fmus):
+    return fmus.builtin(request.param)
+
+
+@pytest.fixture
+def classk(fmus):
+    return fmus.from_toml(CLASS_K_SCENE)
+
+
+def test_validate_fmu_reports_no_problem_for_builtin(builtin):
+    assert validate_fmu(str(builtin.path)) == []
+
+
+def test_validate_fmu_reports_no_problem_for_class_k_scene(classk):
+    assert validate_fmu(str(classk.path)) == []
+    assert classk.md.modelName == "classk-tripod"
+    assert classk.md.coSimulation.modelIdentifier == "classk_tripod"
+
+
+def test_header_is_fmi2_with_structured_names(builtin):
+    assert builtin.md.fmiVersion == "2.0"
+    assert builtin.md.variableNamingConvention == "structured"
+    assert builtin.md.modelName == builtin.scene["name"]
+
+
+def test_units_declared_with_si_base_units(builtin):
+    declared = {u.name: u.baseUnit for u in builtin.md.unitDefinitions}
+    for name, (kg, m, s) in UNITS.items():
+        assert name in declared, f"unit {name} not declared"
+        b = declared[name]
+        assert (b.kg, b.m, b.s, b.A, b.K, b.mol, b.cd) == (kg, m, s, 0, 0, 0, 0), name
+    used = {v.unit for v in builtin.md.modelVariables if v.unit}
+    assert used <= set(declared), used - set(declared)
+
+
+def test_exactly_the_variables_the_scene_calls_for(builtin):
+    expected = expected_variables(builtin.scene)
+    assert set(builtin.variables) == set(expected)
+    for name, (causality, unit) in expected.items():
+        v = builtin.variables[name]
+        assert v.causality == causality, name
+        assert v.unit == unit, name
+
+
+def test_class_k_scene_variables_damping_and_inputs(classk):
+    expected = expected_variables(classk.scene)
+    assert set(classk.variables) == set(expected)
+    names = set(classk.variables)
+    # damping exists only on the cable whose scene entry gives it
+    assert "cable[3].damping" in names
+    assert "cable[1].damping" not in names
+    assert "cable[2].damping" not in names
+    # elastic parameters only on elastic cables, the input only on the controlled one
+    assert {"cable[1].stiffness", "cable[1].rest_length", "cable[3].stiffness"} <= names
+    assert "cable[2].stiffness" not in names and "cable[2].rest_length" not in names
+    assert "cable[2].force_density" in names
+    assert "cable[1].force_density" not in names and "cable[3].force_density" not in names
+    # node forces only for force_inputs nodes
+    assert {"node[4].fx", "node[4].fy", "node[4].fz"} <= names
+    assert not any(f"node[{i}].f{c}" in names for i in (1, 2, 3) for c in "xyz")
+
+
+def test_start_values_come_from_the_scene(classk):
+    v, scene = classk.variables, classk.scene
+    assert float(v["cable[2].force_density"].start) == 3.25
+    assert float(v["cable[1].stiffness"].start) == 100.0
+    assert float(v["cable[1].rest_length"].start) == 1.6
+    assert float(v["cable[3].stiffness"].start) == 120.0
+    assert float(v["cable[3].rest_length"].start) == 1.55
+    assert float(v["cable[3].damping"].start) == 2.5
+    for k, bar in enumerate(scene["bars"], start=1):
+        assert float(v[f"bar[{k}].mass"].start) == bar["mass"]
+    assert float(v["solver.step_size"].start) == 0.0005
+    assert v["solver.correction"].type == "Boolean"
+    assert v["solver.correction"].start == "false"
+    for c in "xyz":
+        assert float(v[f"node[4].f{c}"].start) == 0.0
+
+
+def test_builtin_parameter_starts_match_scene(builtin):
+    v, scene = builtin.variables, builtin.scene
+    solver = scene.get("solver", {})
+    assert float(v["solver.step_size"].start) == solver.get("step_size", 0.001)
+    assert v["solver.correction"].start == str(solver.get("correction", True)).lower()
+    for k, bar in enumerate(scene["bars"], start=1):
+        assert float(v[f"bar[{k}].mass"].start) == bar["mass"]
+    for j, cable in enumerate(scene.get("cables", []), start=1):
+        if "stiffness" in cable:
+            assert float(v[f"cable[{j}].stiffness"].start) == cable["stiffness"]
+
+
+def test_causality_variability_initial_combinations(builtin, classk):
+    for fmu in (builtin, classk):
+        root = ET.fromstring(zipfile.ZipFile(fmu.path).read("modelDescription.xml"))
+        for sv in root.iter("ScalarVariable"):
+            name, caus = sv.get("name"), sv.get("causality")
+            typ = sv[0]
+            if caus == "output":
+                assert sv.get("variability") == "continuous", name
+                assert sv.get("initial") == "calculated", name
+                assert typ.get("start") is None, name
+            elif caus == "input":
+                assert sv.get("variability") == "continuous", name
+                assert sv.get("initial") is None, name  # no initial allowed for inputs
+                assert typ.get("start") is not None and math.isfinite(float(typ.get("start"))), name
+            elif caus == "parameter":
+                assert sv.get("variability") in ("fixed", "tunable"), name
+                assert sv.get("initial") == "exact", name
+                assert typ.get("start") is not None, name
+            else:
+                pytest.fail(f"{name}: unexpected causality {caus}")
+
+
+def test_model_structure_outputs_and_initial_unknowns(builtin):
+    md = builtin.md
+    outputs = [v.name for v in md.modelVariables if v.causality == "output"]
+    assert [u.variable.name for u in md.outputs] == outputs
+    needing = [
+        v.name
+        for v in md.modelVariables
+        if (v.causality == "output" and v.initial in ("approx", "calculated"))
+        or (v.causality == "calculatedParameter")
+    ]
+    assert sorted(u.variable.name for u in md.initialUnknowns) == sorted(needing)
+    root = ET.fromstring(zipfile.ZipFile(builtin.path).read("modelDescription.xml"))
+    structure = [child.tag for child in root.find("ModelStructure")]
+    assert structure == ["Outputs", "InitialUnknowns"]
+    for child in root.find("ModelStructure"):
+        assert len(child) > 0, f"empty <{child.tag}/>"
+
+
+def test_default_experiment_present(builtin):
+    de = builtin.md.defaultExperiment
+    assert de is not None
+    start, stop, step = float(de.startTime), float(de.stopTime), float(de.stepSize)
+    assert start == 0.0 and stop > start
+    assert step == builtin.scene.get("solver", {}).get("step_size", 0.001)
+
+
+def test_co_simulation_capabilities(builtin):
+    cs = builtin.md.coSimulation
+    assert cs.modelIdentifier
+    assert cs.canHandleVariableCommunicationStepSize is True
+    assert cs.canGetAndSetFMUstate is True
+    assert cs.canSerializeFMUstate is True
+    assert cs.canBeInstantiatedOnlyOncePerProcess is False
+
+
+def test_log_categories_declared(builtin):
+    names = [c.name for c in builtin.md.logCategories]
+    assert len(names) == len(set(names)) >= 1
+    assert {"logStatusWarning", "logStatusError"} <= set(names)
+
+
+def test_guid_stable_for_same_scene_and_changes_with_one_mass(fmus, tmp_path):
+    base = fmus.builtin("prism2").scene_text
+    assert "mass = 1.0" in base
+    heavier = base.replace("mass = 1.0", "mass = 1.25", 1)
+    (tmp_path / "a.toml").write_text(base)
+    (tmp_path / "b.toml").write_text(heavier)
+    from fmpy import read_model_description
+
+    g1 = read_model_description(str(fmus.fresh(str(tmp_path / "a.toml"), "guid_a1"))).guid
+    g2 = read_model_description(str(fmus.fresh(str(tmp_path / "a.toml"), "guid_a2"))).guid
+    g3 = read_model_description(str(fmus.fresh(str(tmp_path / "b.toml"), "guid_b"))).guid
+    assert g1 == g2
+    assert g1 != g3
+    # the built-in and its own exported scene text are the same model
+    assert g1 == fmus.builtin("prism2").md.guid
+
+
+def test_archive_layout(builtin):
+    with zipfile.ZipFile(builtin.path) as z:
+        names = z.namelist()
+    ident = builtin.md.coSimulation.modelIdentifier
+    for required in (
+        "modelDescription.xml",
+        f"binaries/linux64/{ident}.so",
+        "resources/scene.toml",
+        "documentation/index.html",
+    ):
+        assert required in names
+    for n in names:
+        assert not n.startswith("/") and not n.startswith("."), n
+        assert "\\" not in n, n
+        assert ".." not in n.split("/"), n
+
+
+def test_default_build_is_prism2(cli, tmp_path):
+    import subprocess
+
+    res = subprocess.run([str(cli), "build"], cwd=tmp_path, check=True, capture_output=True, text=True)
+    path = tmp_path / res.stdout.strip()
+    assert path.is_file()
+    with zipfile.ZipFile(path) as z:
+        assert "binaries/linux64/prism2.so" in z.namelist()
+    assert validate_fmu(str(path)) == []
+
+
+def test_documentation_lists_every_variable_with_unit(builtin, classk):
+    for fmu in (builtin, classk):
+        html = zipfile.ZipFile(fmu.path).read("documentation/index.html").decode()
+        rows = {}
+        for row in html.split("<tr>")[1:]:
+            cells = [c.split("</td>")[0] for c in row.split("<td>")[1:]]
+            if cells:
+                name = cells[0].replace("<code>", "").replace("</code>", "")
+                rows[name] = cells
+        for v in fmu.md.modelVariables:
+            assert v.name in rows, f"{v.name} missing from documentation/index.html"
+            if v.unit:
+                assert v.unit in rows[v.name], f"{v.name}: unit {v.unit} not shown"
+            assert v.description and v.description.split()[0] in html
