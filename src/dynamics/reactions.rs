@@ -11,6 +11,9 @@ use nalgebra::{DMatrix, DVector, Matrix3, Vector3};
 use super::block_cholesky::BlockCholesky;
 use crate::model::coords::Coordinates;
 
+/// A constraint column touching a bar: (column, coefficient, end side 0/1).
+type Term = (usize, f64, usize);
+
 /// One bar's contribution to a 3 × 3 block of K.
 #[derive(Debug, Clone)]
 struct Contribution {
@@ -47,7 +50,7 @@ impl Reactions {
         let nc = coords.constraints.len();
         let n = 3 * nc;
         // Per bar: the (column, coefficient, end side) terms that touch it.
-        let mut touching: Vec<Vec<(usize, f64, usize)>> = vec![Vec::new(); n_bars];
+        let mut touching: Vec<Vec<Term>> = vec![Vec::new(); n_bars];
         for (c, col) in coords.constraints.iter().enumerate() {
             for &(e, coef) in &col.terms {
                 if !coords.static_bar[e / 2] {
@@ -56,19 +59,18 @@ impl Reactions {
             }
         }
         // The 3 × 3 blocks are symmetric, so the sparse path keeps the lower ones only.
-        let pairs =
-            |t: &Vec<(usize, f64, usize)>| -> Vec<((usize, f64, usize), (usize, f64, usize))> {
-                t.iter()
-                    .flat_map(|&a| t.iter().map(move |&b| (a, b)))
-                    .filter(|(a, b)| dense || a.0 >= b.0)
-                    .collect()
-            };
+        let pairs = |t: &Vec<Term>| -> Vec<(Term, Term)> {
+            t.iter()
+                .flat_map(|&a| t.iter().map(move |&b| (a, b)))
+                .filter(|(a, b)| dense || a.0 >= b.0)
+                .collect()
+        };
         let solver = if dense {
             Solver::Dense(vec![0.0; n * n])
         } else {
             let lower: Vec<(usize, usize)> = touching
                 .iter()
-                .flat_map(|t| pairs(t))
+                .flat_map(&pairs)
                 .map(|(a, b)| (a.0, b.0))
                 .collect();
             Solver::Sparse(Box::new(BlockCholesky::new(nc, &lower)))
