@@ -1,0 +1,39 @@
+//! The step allocates nothing: a counting global allocator watches `advance`.
+
+use std::alloc::{GlobalAlloc, Layout, System};
+use std::sync::atomic::{AtomicUsize, Ordering};
+
+use tensegrity_fmu::scene::builtin;
+use tensegrity_fmu::{Model, Simulation};
+
+struct Counting;
+
+static ALLOCATIONS: AtomicUsize = AtomicUsize::new(0);
+
+unsafe impl GlobalAlloc for Counting {
+    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
+        ALLOCATIONS.fetch_add(1, Ordering::SeqCst);
+        System.alloc(layout)
+    }
+    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
+        System.dealloc(ptr, layout)
+    }
+}
+
+#[global_allocator]
+static GLOBAL: Counting = Counting;
+
+#[test]
+fn stepping_allocates_nothing() {
+    for name in ["prism2", "icosahedron", "tower20"] {
+        let mut sim = Simulation::new(Model::new(&builtin(name).unwrap()).unwrap());
+        sim.inputs.node_force[0].x = 1.0;
+        sim.advance(2, 1e-3).unwrap();
+        let before = ALLOCATIONS.load(Ordering::SeqCst);
+        sim.advance(200, 1e-3).unwrap();
+        sim.refresh();
+        let _ = (sim.energy(), sim.length_error(), sim.bar_force(0), sim.cable_tension(0));
+        let during = ALLOCATIONS.load(Ordering::SeqCst) - before;
+        assert_eq!(during, 0, "{name}: {during} allocations in 200 steps");
+    }
+}
