@@ -53,6 +53,12 @@ enum Command {
         #[arg(long)]
         binary: Option<PathBuf>,
     },
+    /// Regenerate the golden modelDescription.xml files of the shipped scenes.
+    Golden {
+        /// Folder to write `<scene>.xml` into.
+        #[arg(long, default_value = "modelDescription")]
+        dir: PathBuf,
+    },
     /// Print a built-in scene as TOML (or list them with no name).
     Scene {
         /// Built-in name.
@@ -104,6 +110,16 @@ pub fn run(cli: Cli) -> Result<(), String> {
             Ok(())
         }
         Command::Bench { stages, seconds } => bench::scaling(&stages, seconds),
+        Command::Golden { dir } => {
+            for name in scene::builtin_names() {
+                let s = scene::builtin(name).expect("built-in");
+                let xml = fmi::package::golden_model_description(&s)?;
+                let path = dir.join(format!("{name}.xml"));
+                std::fs::write(&path, xml).map_err(|e| format!("{}: {e}", path.display()))?;
+                println!("{}", path.display());
+            }
+            Ok(())
+        }
         Command::Build {
             scene,
             output,

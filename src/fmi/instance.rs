@@ -104,7 +104,9 @@ impl Instance {
             guid: expected,
             fresh: core.clone(),
             core,
-            logging: [logging_on; 3],
+            // Warnings and errors reach the importer unless it switches them off with
+            // fmi2SetDebugLogging; loggingOn governs the informational category.
+            logging: [logging_on, true, true],
             messages: Vec::new(),
         };
         for w in instance.core.sim.warnings().to_vec() {
@@ -211,6 +213,16 @@ impl Instance {
         self.require("fmi2ExitInitializationMode", &[Mode::InitializationMode])?;
         self.rebuild_if_needed("fmi2ExitInitializationMode")?;
         self.core.mode = Mode::StepComplete;
+        let model = self.core.sim.model();
+        let summary = format!(
+            "fmi2ExitInitializationMode: {} bars, {} cables, {} reduced coordinates, internal step {} s, correction {}",
+            model.bars.len(),
+            model.cables.len(),
+            model.coords.r,
+            self.core.scene.solver.step_size,
+            if self.core.sim.correction { "on" } else { "off" }
+        );
+        self.log(Category::Events, summary);
         Ok(Status::Ok)
     }
 
@@ -224,6 +236,10 @@ impl Instance {
     /// `fmi2Reset`: exactly the post-instantiate state.
     pub fn reset(&mut self) -> FmiResult {
         self.core = self.fresh.clone();
+        self.log(
+            Category::Events,
+            "fmi2Reset: back to the state after fmi2Instantiate",
+        );
         Ok(Status::Ok)
     }
 
@@ -426,6 +442,12 @@ impl Instance {
         }
         self.core.time = end;
         self.core.stale = true;
+        if self.logging[Category::Events as usize] {
+            self.log(
+                Category::Events,
+                format!("fmi2DoStep: {t} -> {end} s in {n} internal steps"),
+            );
+        }
         Ok(Status::Ok)
     }
 

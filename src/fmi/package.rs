@@ -25,6 +25,21 @@ pub struct Built {
     pub variables: usize,
 }
 
+/// The GUID placeholder of the golden modelDescription files (the real GUID hashes the
+/// binary, so it changes with every code change).
+pub const GOLDEN_GUID: &str = "{00000000-0000-0000-0000-000000000000}";
+
+/// modelDescription.xml of `scene` as packaged, but with [`GOLDEN_GUID`]: the golden
+/// files under `modelDescription/` hold this text for each shipped scene.
+pub fn golden_model_description(scene: &Scene) -> Result<String, String> {
+    let model = Model::new(scene).map_err(|e| e.to_string())?;
+    let sim = Simulation::new(model);
+    let table = VariableTable::new(&sim);
+    model_description(sim.model(), &table, GOLDEN_GUID)
+        .to_xml()
+        .map_err(|e| format!("modelDescription.xml: {e}"))
+}
+
 /// Builds the FMU for `scene` at `out`, with the shared library at `binary`.
 pub fn build_fmu(scene: &Scene, binary: &Path, out: &Path) -> Result<Built, String> {
     let scene_text = scene.to_toml_string();
