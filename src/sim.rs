@@ -141,6 +141,13 @@ impl Simulation {
 
     /// One step from `t` to `t_next`. On failure the state stays at `t`.
     pub fn step_to(&mut self, t: f64, t_next: f64) -> Result<(), StepError> {
+        self.step(t, t_next - t, t_next)
+    }
+
+    /// One step of exactly `h` from `t`, after which the time is `t_next` (≈ `t + h`; a
+    /// caller on a fixed grid passes both so that round-off in `t_next − t` cannot make
+    /// otherwise identical runs differ).
+    pub fn step(&mut self, t: f64, h: f64, t_next: f64) -> Result<(), StepError> {
         self.check_inputs()?;
         self.last_good.copy_from_slice(&self.state.y);
         let mut system = System {
@@ -148,8 +155,7 @@ impl Simulation {
             inputs: &self.inputs,
             ws: &mut self.ws,
         };
-        self.integrator
-            .step(&mut system, t, &mut self.state.y, t_next - t);
+        self.integrator.step(&mut system, t, &mut self.state.y, h);
         if self.correction {
             self.correct();
         }

@@ -162,7 +162,7 @@ fn simulate(
     while done < steps {
         let n = every.min(steps - done);
         for k in done..done + n {
-            sim.step_to(k as f64 * h, (k + 1) as f64 * h)
+            sim.step(k as f64 * h, h, (k + 1) as f64 * h)
                 .map_err(|e| e.to_string())?;
         }
         sim.refresh();

@@ -303,25 +303,9 @@ impl Instance {
         self.refresh_outputs(call)?;
         for (vr, value) in vrs.iter().zip(values.iter_mut()) {
             let binding = self.lookup(call, *vr, base)?;
-            *value = self.read(binding);
+            *value = self.core.read(binding);
         }
         Ok(Status::Ok)
-    }
-
-    fn read(&self, binding: Binding) -> f64 {
-        let core = &self.core;
-        let sim = &core.sim;
-        match binding {
-            Binding::Output(q) => q.value(sim),
-            Binding::ForceDensity(k) => sim.inputs.force_density[k],
-            Binding::NodeForce(k, axis) => sim.inputs.node_force[k][axis],
-            Binding::StepSize => core.scene.solver.step_size,
-            Binding::Correction => f64::from(u8::from(core.scene.solver.correction)),
-            Binding::Stiffness(j) => core.scene.cables[j].stiffness.unwrap_or(0.0),
-            Binding::RestLength(j) => core.scene.cables[j].rest_length.unwrap_or(0.0),
-            Binding::Damping(j) => core.scene.cables[j].damping.unwrap_or(0.0),
-            Binding::Mass(i) => core.scene.bars[i].mass,
-        }
     }
 
     /// Get or set of a type this FMU has no variables of (Integer, String): only an
@@ -435,7 +419,15 @@ impl Instance {
             } else {
                 t + (k + 1) as f64 * dt
             };
-            if let Err(e) = self.core.sim.step_to(t0, t1) {
+            // Full steps use dt itself, so any split into communication steps that
+            // lands on the grid takes bit-identical internal steps.
+            let rest = end - t0;
+            let step = if k + 1 < n || (rest - dt).abs() <= 1e-9 * dt {
+                dt
+            } else {
+                rest
+            };
+            if let Err(e) = self.core.sim.step(t0, step, t1) {
                 self.core.sim.set_state(before);
                 return Err(error(format!("fmi2DoStep: {e}")));
             }
@@ -518,6 +510,23 @@ pub(super) struct PendingSet {
 }
 
 impl Core {
+    /// The current value behind a binding.
+    pub(super) fn read(&self, binding: Binding) -> f64 {
+        let core = self;
+        let sim = &core.sim;
+        match binding {
+            Binding::Output(q) => q.value(sim),
+            Binding::ForceDensity(k) => sim.inputs.force_density[k],
+            Binding::NodeForce(k, axis) => sim.inputs.node_force[k][axis],
+            Binding::StepSize => core.scene.solver.step_size,
+            Binding::Correction => f64::from(u8::from(core.scene.solver.correction)),
+            Binding::Stiffness(j) => core.scene.cables[j].stiffness.unwrap_or(0.0),
+            Binding::RestLength(j) => core.scene.cables[j].rest_length.unwrap_or(0.0),
+            Binding::Damping(j) => core.scene.cables[j].damping.unwrap_or(0.0),
+            Binding::Mass(i) => core.scene.bars[i].mass,
+        }
+    }
+
     fn clone_for_set(&self) -> PendingSet {
         PendingSet {
             scene: self.scene.clone(),
@@ -538,7 +547,7 @@ impl Core {
     }
 }
 
-fn apply_parameter(scene: &mut Scene, binding: Binding, value: f64) {
+pub(super) fn apply_parameter(scene: &mut Scene, binding: Binding, value: f64) {
     match binding {
         Binding::StepSize => scene.solver.step_size = value,
         Binding::Correction => scene.solver.correction = value != 0.0,

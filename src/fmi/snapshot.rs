@@ -1,17 +1,22 @@
 //! FMU state snapshots (`fmi2GetFMUstate`) and their serialized form: a magic, a format
-//! version and the GUID, then the state in little-endian fields. A buffer from another
-//! FMU, another version or with a wrong length is rejected.
+//! version and the GUID, then the state in little-endian fields, then a SHA-256 of it all.
+//! A buffer from another FMU, another version, with a wrong length or a bad checksum is
+//! rejected. Only parameters travel, never geometry or topology.
 
 use nalgebra::Vector3;
+use sha2::{Digest, Sha256};
 
-use super::instance::Core;
+use super::instance::{apply_parameter, Core};
+use super::variables::Binding;
 use super::Mode;
 use crate::model::Model;
-use crate::scene::Scene;
 use crate::sim::{Simulation, State};
+use fmi2_model_description::Causality;
 
 const MAGIC: &[u8; 8] = b"TNSGSTAT";
 const VERSION: u32 = 1;
+/// A SHA-256 of everything before it closes the buffer, so corruption is caught.
+const DIGEST_LEN: usize = 32;
 
 /// Everything needed to return an instance to a point in its history.
 #[derive(Debug, Clone, PartialEq)]
@@ -25,7 +30,8 @@ pub struct Snapshot {
     node_force: Vec<Vector3<f64>>,
     warned_negative: Vec<bool>,
     rebuild: bool,
-    scene: String,
+    /// Values of the parameter variables, in table order.
+    parameters: Vec<f64>,
 }
 
 impl Snapshot {
@@ -40,7 +46,7 @@ impl Snapshot {
             node_force: core.sim.inputs.node_force.clone(),
             warned_negative: core.warned_negative.clone(),
             rebuild: core.rebuild,
-            scene: core.scene.to_toml_string(),
+            parameters: parameter_bindings(core).map(|b| core.read(b)).collect(),
         }
     }
 
@@ -51,7 +57,14 @@ impl Snapshot {
                 self.guid
             ));
         }
-        let scene = Scene::from_toml_str(&self.scene).map_err(|e| e.to_string())?;
+        let bindings: Vec<Binding> = parameter_bindings(core).collect();
+        if bindings.len() != self.parameters.len() {
+            return Err("the state does not match this FMU's parameters".into());
+        }
+        let mut scene = core.scene.clone();
+        for (&binding, &value) in bindings.iter().zip(&self.parameters) {
+            apply_parameter(&mut scene, binding, value);
+        }
         let mut sim = if scene == core.scene {
             core.sim.clone()
         } else {
@@ -105,12 +118,20 @@ impl Snapshot {
                 .collect::<Vec<_>>(),
         );
         out.push(u8::from(self.rebuild));
-        put_bytes(&mut out, self.scene.as_bytes());
+        put_len(&mut out, self.parameters.len());
+        put_f64s(&mut out, &self.parameters);
+        let digest = Sha256::digest(&out);
+        out.extend_from_slice(&digest);
         out
     }
 
     /// Parses a serialized state, checking magic, version and GUID.
     pub fn from_bytes(guid: &str, bytes: &[u8]) -> Result<Self, String> {
+        let body_len = bytes
+            .len()
+            .checked_sub(DIGEST_LEN)
+            .ok_or("truncated serialized state")?;
+        let (bytes, digest) = bytes.split_at(body_len);
         let mut r = Reader { bytes, at: 0 };
         if r.take(MAGIC.len())? != MAGIC {
             return Err("not a serialized tensegrity-fmu state (bad magic)".into());
@@ -143,15 +164,19 @@ impl Snapshot {
             .collect::<Result<Vec<_>, String>>()?;
         let warned_negative = r.bytes()?.iter().map(|&b| b != 0).collect();
         let rebuild = r.u8()? != 0;
-        let scene =
-            String::from_utf8(r.bytes()?.to_vec()).map_err(|_| "corrupt scene".to_string())?;
+        let n = r.len()?;
+        let parameters = r.f64s(n)?;
         if r.at != bytes.len() {
             return Err("trailing bytes after the serialized state".into());
+        }
+        if Sha256::digest(bytes).as_slice() != digest {
+            return Err("corrupt serialized state (checksum mismatch)".into());
         }
         let finite = [time, state_time, stop]
             .iter()
             .chain(&y)
             .chain(&force_density)
+            .chain(&parameters)
             .all(|x| x.is_finite())
             && node_force.iter().all(|f| f.iter().all(|x| x.is_finite()));
         if !finite {
@@ -170,9 +195,17 @@ impl Snapshot {
             node_force,
             warned_negative,
             rebuild,
-            scene,
+            parameters,
         })
     }
+}
+
+fn parameter_bindings(core: &Core) -> impl Iterator<Item = Binding> + '_ {
+    core.table
+        .variables
+        .iter()
+        .filter(|v| v.causality == Causality::Parameter)
+        .map(|v| v.binding)
 }
 
 fn mode_code(mode: Mode) -> u8 {
