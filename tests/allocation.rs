@@ -32,7 +32,12 @@ fn stepping_allocates_nothing() {
         let before = ALLOCATIONS.load(Ordering::SeqCst);
         sim.advance(200, 1e-3).unwrap();
         sim.refresh();
-        let _ = (sim.energy(), sim.length_error(), sim.bar_force(0), sim.cable_tension(0));
+        let _ = (
+            sim.energy(),
+            sim.length_error(),
+            sim.bar_force(0),
+            sim.cable_tension(0),
+        );
         let during = ALLOCATIONS.load(Ordering::SeqCst) - before;
         assert_eq!(during, 0, "{name}: {during} allocations in 200 steps");
     }

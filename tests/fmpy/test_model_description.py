@@ -1,10 +1,12 @@
 """modelDescription.xml, the archive and the documentation of the built FMUs (issue 3, items 5-7)."""
 
 import math
+import subprocess
 import xml.etree.ElementTree as ET
 import zipfile
 
 import pytest
+from fmpy import read_model_description
 from fmpy.validation import validate_fmu
 
 from conftest import BUILTINS
@@ -254,8 +256,6 @@ def test_guid_stable_for_same_scene_and_changes_with_one_mass(fmus, tmp_path):
     heavier = base.replace("mass = 1.0", "mass = 1.25", 1)
     (tmp_path / "a.toml").write_text(base)
     (tmp_path / "b.toml").write_text(heavier)
-    from fmpy import read_model_description
-
     g1 = read_model_description(str(fmus.fresh(str(tmp_path / "a.toml"), "guid_a1"))).guid
     g2 = read_model_description(str(fmus.fresh(str(tmp_path / "a.toml"), "guid_a2"))).guid
     g3 = read_model_description(str(fmus.fresh(str(tmp_path / "b.toml"), "guid_b"))).guid
@@ -283,8 +283,6 @@ def test_archive_layout(builtin):
 
 
 def test_default_build_is_prism2(cli, tmp_path):
-    import subprocess
-
     res = subprocess.run([str(cli), "build"], cwd=tmp_path, check=True, capture_output=True, text=True)
     path = tmp_path / res.stdout.strip()
     assert path.is_file()

@@ -41,6 +41,18 @@ def test_simulate_fmu_default_experiment_holds_at_rest(fmus):
     assert tensions.min() == pytest.approx(fmu.scene["prestress"]["min_tension"], rel=1e-9)
 
 
+def test_force_density_start_values_give_the_initial_tensions(fmus, open_fmu):
+    fmu = fmus.builtin("prism2")
+    s = open_fmu(fmu).init()
+    for j, cable in enumerate(fmu.scene["cables"], start=1):
+        assert cable["control"] == "force_density"
+        start = float(fmu.variables[f"cable[{j}].force_density"].start)
+        assert s.get([f"cable[{j}].force_density"])[0] == start
+        # tension = force density x length, the length from the scene's start geometry
+        a, b = (np.array(fmu.scene["nodes"][n - 1]) for n in cable["nodes"])
+        assert s.get([f"cable[{j}].tension"])[0] == pytest.approx(start * np.linalg.norm(b - a), rel=1e-12)
+
+
 def run_cli_csv(cli, scene, stop, tmp_path):
     out = tmp_path / "cli.csv"
     subprocess.run(

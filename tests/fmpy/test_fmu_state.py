@@ -1,0 +1,231 @@
+"""FMU state: get/set/free, serialize/deserialize, and rejection of foreign or corrupt buffers (issue 3, item 4)."""
+
+import struct
+
+import numpy as np
+import pytest
+from fmpy.fmi1 import FMICallException
+
+FORCE = {"node[7].fx": 8.0, "node[9].fz": -2.0}
+
+
+@pytest.fixture
+def elastic(fmus):
+    return fmus.builtin("prism2-elastic")
+
+
+def reference(open_fmu, fmu, steps, h=0.001, **init):
+    """Outputs of an uninterrupted run of `steps` steps (a second, independent instance)."""
+    ref = open_fmu(fmu, name=f"ref{steps}").init(**init)
+    ref.run(steps, h)
+    return ref.outputs()
+
+
+def test_get_set_state_round_trip_is_bit_identical(elastic, open_fmu):
+    s = open_fmu(elastic).init(inputs=FORCE)
+    s.run(30, 0.001)
+    state = s.fmu.getFMUstate()
+    at_state = s.outputs()
+    s.set({"node[7].fx": -50.0, "node[8].fy": 12.0})  # inputs are part of the state too
+    s.run(20, 0.001)
+    diverged = s.outputs()
+    s.fmu.setFMUstate(state)
+    s.time = 0.03
+    assert np.array_equal(s.outputs(), at_state)
+    assert s.get(["node[7].fx", "node[8].fy"]).tolist() == [8.0, 0.0]
+    assert s.status_time() == pytest.approx(0.03, abs=1e-15)
+    s.run(20, 0.001)
+    uninterrupted = reference(open_fmu, elastic, 50, inputs=FORCE)
+    assert np.array_equal(s.outputs(), uninterrupted)
+    assert not np.array_equal(diverged, uninterrupted)
+    # the state can be set again, any number of times
+    s.fmu.setFMUstate(state)
+    assert np.array_equal(s.outputs(), at_state)
+    s.fmu.freeFMUstate(state)
+
+
+def test_set_state_rewinds_time_for_the_next_step(elastic, open_fmu):
+    s = open_fmu(elastic).init(inputs=FORCE)
+    s.run(10, 0.001)
+    state = s.fmu.getFMUstate()
+    s.run(10, 0.001)
+    s.fmu.setFMUstate(state)
+    with pytest.raises(FMICallException):
+        s.fmu.doStep(0.02, 0.001)  # the instance is back at t = 0.01
+    s.fmu.setFMUstate(state)  # recovers from that error too
+    s.fmu.doStep(0.01, 0.001)
+    s.fmu.freeFMUstate(state)
+
+
+def test_serialize_deserialize_round_trip_same_instance(elastic, open_fmu):
+    s = open_fmu(elastic).init(inputs=FORCE)
+    s.run(25, 0.001)
+    state = s.fmu.getFMUstate()
+    blob = s.fmu.serializeFMUstate(state)
+    assert blob == s.fmu.serializeFMUstate(state)  # deterministic
+    s.fmu.freeFMUstate(state)
+    at_state = s.outputs()
+    s.run(25, 0.001)
+    restored = s.fmu.deSerializeFMUstate(blob)
+    s.fmu.setFMUstate(restored)
+    s.time = 0.025
+    assert np.array_equal(s.outputs(), at_state)
+    assert s.fmu.serializeFMUstate(restored) == blob
+    s.run(25, 0.001)
+    assert np.array_equal(s.outputs(), reference(open_fmu, elastic, 50, inputs=FORCE))
+    s.fmu.freeFMUstate(restored)
+
+
+def test_serialized_state_moves_to_another_instance(elastic, open_fmu):
+    a = open_fmu(elastic, name="a").init(inputs=FORCE)
+    a.run(40, 0.001)
+    blob = a.fmu.serializeFMUstate(a.fmu.getFMUstate())
+    b = open_fmu(elastic, name="b").init()  # different inputs, at t = 0
+    state = b.fmu.deSerializeFMUstate(blob)
+    b.fmu.setFMUstate(state)
+    b.time = 0.04
+    assert np.array_equal(b.outputs(), a.outputs())
+    a.run(10, 0.001)
+    b.run(10, 0.001)
+    assert np.array_equal(b.outputs(), a.outputs())
+    b.fmu.freeFMUstate(state)
+
+
+def test_state_carries_parameters_set_in_initialization(elastic, open_fmu):
+    heavy = open_fmu(elastic, name="heavy").init(params={"bar[5].mass": 3.0}, inputs=FORCE)
+    heavy.run(20, 0.001)
+    blob = heavy.fmu.serializeFMUstate(heavy.fmu.getFMUstate())
+    plain = open_fmu(elastic, name="plain").init(inputs=FORCE)
+    plain.run(20, 0.001)
+    plain.fmu.setFMUstate(plain.fmu.deSerializeFMUstate(blob))
+    plain.time = 0.02
+    assert plain.get(["bar[5].mass"])[0] == 3.0
+    heavy.run(30, 0.001)
+    plain.run(30, 0.001)
+    assert np.array_equal(plain.outputs(), heavy.outputs())
+    unchanged = reference(open_fmu, elastic, 50, inputs=FORCE)
+    assert not np.array_equal(plain.outputs(), unchanged)
+
+
+def test_state_from_initialization_mode(elastic, open_fmu):
+    s = open_fmu(elastic)
+    s.fmu.setupExperiment(startTime=0.0)
+    s.fmu.enterInitializationMode()
+    early = s.fmu.getFMUstate()
+    s.fmu.exitInitializationMode()
+    s.run(5, 0.001)
+    s.fmu.setFMUstate(early)
+    s.set(FORCE)  # an input, in initialization mode again
+    s.fmu.exitInitializationMode()
+    s.time = 0.0
+    s.run(30, 0.001)
+    assert np.array_equal(s.outputs(), reference(open_fmu, elastic, 30, inputs=FORCE))
+    s.fmu.freeFMUstate(early)
+
+
+# --- rejected buffers ----------------------------------------------------------------
+
+
+def header_offsets(blob):
+    """(guid_start, guid_end, time_offset) of the serialized layout: magic, version, GUID, mode, time."""
+    (n,) = struct.unpack_from("<Q", blob, 12)
+    return 20, 20 + n, 20 + n + 1
+
+
+def corruptions(blob):
+    g0, g1, t = header_offsets(blob)
+    flip = lambda b, i: b[:i] + bytes([b[i] ^ 0xFF]) + b[i + 1 :]  # noqa: E731
+    return {
+        "magic": flip(blob, 0),
+        "version": flip(blob, 8),
+        "guid length": flip(blob, 12),
+        "guid": flip(blob, g0 + 5),
+        "mode": flip(blob, g1),
+        "nan time": blob[:t] + struct.pack("<d", float("nan")) + blob[t + 8 :],
+        "truncated to half": blob[: len(blob) // 2],
+        "truncated by one": blob[:-1],
+        "header only": blob[:12],
+        "trailing byte": blob + b"\0",
+        "empty": b"",
+        "garbage": bytes(range(256)) * 4,
+    }
+
+
+@pytest.fixture
+def prism2_blob(fmus, open_fmu):
+    s = open_fmu(fmus.builtin("prism2"), name="source").init()
+    s.run(10, 0.001)
+    state = s.fmu.getFMUstate()
+    blob = s.fmu.serializeFMUstate(state)
+    s.fmu.freeFMUstate(state)
+    return blob
+
+
+def assert_rejected_then_usable(s, blob, open_fmu):
+    before = s.outputs()
+    with pytest.raises(FMICallException) as e:
+        state = s.fmu.deSerializeFMUstate(blob)
+        s.fmu.setFMUstate(state)  # should not get here; if it does, setting must fail
+    assert e.value.status == 3
+    assert s.errors(), "the rejection was not logged"
+    s.fmu.reset()
+    s.init()
+    s.run(10, 0.001)
+    assert np.array_equal(s.outputs(), before)  # same history as before the rejection
+
+
+@pytest.mark.parametrize(
+    "kind",
+    [
+        "magic", "version", "guid length", "guid", "mode", "nan time", "truncated to half",
+        "truncated by one", "header only", "trailing byte", "empty", "garbage",
+    ],
+)
+def test_corrupt_buffer_is_rejected_and_instance_recovers(fmus, open_fmu, prism2_blob, kind):
+    bad = corruptions(prism2_blob)[kind]
+    assert bad != prism2_blob
+    s = open_fmu(fmus.builtin("prism2")).init()
+    s.run(10, 0.001)
+    assert_rejected_then_usable(s, bad, open_fmu)
+
+
+def test_state_of_a_different_fmu_is_rejected(fmus, open_fmu):
+    other = open_fmu(fmus.builtin("prism2-elastic"), name="other").init()
+    other.run(10, 0.001)
+    foreign = other.fmu.serializeFMUstate(other.fmu.getFMUstate())
+    s = open_fmu(fmus.builtin("prism2")).init()
+    s.run(10, 0.001)
+    assert_rejected_then_usable(s, foreign, open_fmu)
+    assert any("another FMU" in m or "GUID" in m for m in s.errors())
+
+
+def test_every_flipped_bit_past_the_header_is_rejected(fmus, open_fmu, prism2_blob):
+    """Flip the low bit of each byte after the GUID, one at a time: a state double, an input,
+    a length, or (if the buffer carries it) the scene text, where '5' becomes '4' in a node
+    coordinate. Such a buffer is well-formed but no instance of this FMU produced it.
+    """
+    fmu = fmus.builtin("prism2")
+    s = open_fmu(fmu).init()
+    s.run(10, 0.001)
+    before = s.outputs()
+    _, guid_end, _ = header_offsets(prism2_blob)
+    accepted = []
+    for i in range(guid_end, len(prism2_blob)):
+        bad = prism2_blob[:i] + bytes([prism2_blob[i] ^ 0x01]) + prism2_blob[i + 1 :]
+        try:
+            state = s.fmu.deSerializeFMUstate(bad)
+            s.fmu.setFMUstate(state)
+        except FMICallException:
+            continue
+        s.fmu.freeFMUstate(state)
+        changed = [n for n, a, b in zip(fmu.outputs, before, s.outputs()) if a != b]
+        accepted.append((i, prism2_blob[i - 6 : i + 6], changed[:3]))
+    s.fmu.reset()
+    s.init()
+    s.run(10, 0.001)
+    assert np.array_equal(s.outputs(), before)
+    moved_pinned = [a for a in accepted if any(n.startswith(("node[1].", "node[2].", "node[3].")) for n in a[2])]
+    assert accepted == [], (
+        f"{len(accepted)} of {len(prism2_blob) - guid_end} corrupt buffers accepted, "
+        f"{len(moved_pinned)} of them moving a pinned node; e.g. {(moved_pinned or accepted)[:3]}"
+    )
