@@ -8,8 +8,8 @@ use zip::write::SimpleFileOptions;
 
 use super::description::{model_description, model_identifier};
 use super::documentation::index_html;
-use super::guid_for;
 use super::variables::VariableTable;
+use super::{guid_for, BUILD_ID};
 use crate::model::Model;
 use crate::scene::Scene;
 use crate::sim::Simulation;
@@ -54,6 +54,14 @@ pub fn build_fmu(scene: &Scene, binary: &Path, out: &Path) -> Result<Built, Stri
     let id = model_identifier(sim.model());
     let so = std::fs::read(binary)
         .map_err(|e| format!("cannot read the FMU binary {}: {e}", binary.display()))?;
+    // The binary hashes the same BUILD_ID into the GUID; a stale one could never load.
+    if !so.windows(BUILD_ID.len()).any(|w| w == BUILD_ID.as_bytes()) {
+        return Err(format!(
+            "the FMU binary {} was built from other sources than this program (its GUIDs \
+             would not match); rebuild both with `cargo build --release --workspace`",
+            binary.display()
+        ));
+    }
     let file =
         std::fs::File::create(out).map_err(|e| format!("cannot create {}: {e}", out.display()))?;
     let mut zip = zip::ZipWriter::new(file);

@@ -1,0 +1,194 @@
+//! The packaged FMU seen through an independent FMI 2.0 importer (the `fmi` crate):
+//! archive loading, co-simulation instantiation, value references looked up by name in the
+//! parsed model description, and agreement with the library it wraps.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+use std::sync::OnceLock;
+
+use fmi::fmi2::import::Fmi2Import;
+use fmi::fmi2::instance::{CoSimulation, Common};
+use fmi::traits::FmiImport;
+use tensegrity_fmu::{Model, Simulation};
+
+const SCENE: &str = "prism2-elastic";
+const H: f64 = 1e-3;
+const STEPS: usize = 500;
+const FORCE: f64 = 5.0;
+
+/// What the FMU reported for node 7 and the bar-length residual.
+#[derive(Debug, Clone, Copy)]
+struct FmuRun {
+    x_start: f64,
+    x_end: f64,
+    length_error: f64,
+}
+
+/// `target/<profile>`, the directory holding the CLI this test was built with.
+fn profile_dir() -> PathBuf {
+    Path::new(env!("CARGO_BIN_EXE_tensegrity-fmu"))
+        .parent()
+        .expect("the CLI binary has a parent directory")
+        .to_path_buf()
+}
+
+/// The generic FMU binary, (re)built with cargo: it must come from the same sources as the
+/// CLI, whose build id goes into the GUID that `fmi2Instantiate` checks. The build is a
+/// no-op when `cargo test --workspace` already built it.
+fn fmu_binary() -> PathBuf {
+    let dir = profile_dir();
+    let target_dir = dir.parent().expect("target directory");
+    let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".to_owned());
+    let mut cmd = Command::new(cargo);
+    cmd.current_dir(env!("CARGO_MANIFEST_DIR"))
+        .args(["build", "-p", "tensegrity-fmu-binary", "--target-dir"])
+        .arg(target_dir);
+    if dir.file_name().is_some_and(|n| n == "release") {
+        cmd.arg("--release");
+    }
+    let status = cmd.status().expect("run cargo build for the FMU binary");
+    assert!(
+        status.success(),
+        "cargo build -p tensegrity-fmu-binary failed"
+    );
+    let so = dir.join("libtensegrity_fmu_binary.so");
+    assert!(so.is_file(), "{} is missing after the build", so.display());
+    so
+}
+
+/// Packages the scene with the CLI into a fresh temporary directory.
+fn build_fmu(dir: &Path) -> PathBuf {
+    std::fs::create_dir_all(dir).expect("create the temporary directory");
+    let fmu = dir.join(format!("{SCENE}.fmu"));
+    let out = Command::new(env!("CARGO_BIN_EXE_tensegrity-fmu"))
+        .args(["build", SCENE, "-o"])
+        .arg(&fmu)
+        .arg("--binary")
+        .arg(fmu_binary())
+        .output()
+        .expect("run tensegrity-fmu build");
+    assert!(
+        out.status.success(),
+        "tensegrity-fmu build failed:\n{}{}",
+        String::from_utf8_lossy(&out.stdout),
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(fmu.is_file(), "{} was not written", fmu.display());
+    fmu
+}
+
+fn vr(import: &Fmi2Import, name: &str) -> u32 {
+    import
+        .model_description()
+        .model_variable_by_name(name)
+        .unwrap_or_else(|e| panic!("{name} is not in the model description: {e}"))
+        .value_reference
+}
+
+/// Loads the FMU with the `fmi` crate and runs the experiment through the C API.
+fn run_fmu(fmu: &Path) -> FmuRun {
+    let import: Fmi2Import = fmi::import::from_path(fmu).expect("import the FMU");
+    let md = import.model_description();
+    assert_eq!(md.fmi_version, "2.0");
+    assert_eq!(md.model_name, SCENE);
+    let cs = md.co_simulation.as_ref().expect("a CoSimulation element");
+    assert_eq!(cs.model_identifier, "prism2_elastic");
+    let (fx, x, len_err) = (
+        vr(&import, "node[7].fx"),
+        vr(&import, "node[7].x"),
+        vr(&import, "constraint.length_error"),
+    );
+
+    let mut inst = import
+        .instantiate_cs("fmi_import", false, false)
+        .expect("fmi2Instantiate (NULL on a GUID mismatch: .so and CLI from other sources)");
+    assert_eq!(Common::get_version(&inst), "2.0");
+    assert_eq!(inst.get_types_platform(), "default");
+    Common::setup_experiment(&mut inst, None, 0.0, None).expect("fmi2SetupExperiment");
+    Common::enter_initialization_mode(&mut inst).expect("fmi2EnterInitializationMode");
+    Common::exit_initialization_mode(&mut inst).expect("fmi2ExitInitializationMode");
+
+    let mut v = [0.0];
+    inst.get_real(&[x], &mut v).expect("fmi2GetReal node[7].x");
+    let x_start = v[0];
+    inst.set_real(&[fx], &[FORCE])
+        .expect("fmi2SetReal node[7].fx");
+    inst.get_real(&[fx], &mut v)
+        .expect("fmi2GetReal node[7].fx");
+    assert_eq!(v[0], FORCE, "the input reads back as set");
+
+    for k in 0..STEPS {
+        inst.do_step(k as f64 * H, H, true)
+            .unwrap_or_else(|e| panic!("fmi2DoStep {k}: {e}"));
+    }
+    let mut out = [0.0; 2];
+    inst.get_real(&[x, len_err], &mut out)
+        .expect("fmi2GetReal outputs");
+    Common::terminate(&mut inst).expect("fmi2Terminate");
+    FmuRun {
+        x_start,
+        x_end: out[0],
+        length_error: out[1],
+    }
+}
+
+/// Builds and runs the FMU once for all tests in this file.
+fn fmu_run() -> FmuRun {
+    static RUN: OnceLock<FmuRun> = OnceLock::new();
+    *RUN.get_or_init(|| {
+        let dir = std::env::temp_dir().join(format!(
+            "tensegrity-fmi-import-{}-{}",
+            std::process::id(),
+            std::time::SystemTime::now()
+                .duration_since(std::time::UNIX_EPOCH)
+                .map_or(0, |d| d.as_nanos())
+        ));
+        let fmu = build_fmu(&dir);
+        let run = run_fmu(&fmu);
+        let _ = std::fs::remove_dir_all(&dir);
+        run
+    })
+}
+
+#[test]
+fn fmi_crate_imports_and_steps_the_fmu() {
+    let run = fmu_run();
+    eprintln!("{run:?}");
+    assert!(run.x_start.is_finite() && run.x_end.is_finite());
+    assert!(
+        run.x_end - run.x_start > 1e-3,
+        "node 7 moved {} m in +x under +{FORCE} N",
+        run.x_end - run.x_start
+    );
+    assert!(
+        run.length_error.abs() <= 1e-12,
+        "bar-length error {}",
+        run.length_error
+    );
+}
+
+#[test]
+fn fmu_matches_the_library() {
+    let run = fmu_run();
+    let scene = tensegrity_fmu::scene::builtin(SCENE).expect("built-in scene");
+    let model = Model::new(&scene).expect("valid scene");
+    assert_eq!(model.force_inputs[0], 6, "node 7 is the first force input");
+    let mut sim = Simulation::new(model);
+    let x_start = sim.node_position(6).x;
+    sim.inputs.node_force[0].x = FORCE;
+    // `step_to` steps by `(k+1)h - kh`, the FMU by exactly h: they agree to round-off.
+    for k in 0..STEPS {
+        sim.step_to(k as f64 * H, (k + 1) as f64 * H)
+            .unwrap_or_else(|e| panic!("library step {k}: {e}"));
+    }
+    sim.refresh();
+    let x_end = sim.node_position(6).x;
+    let diff = (run.x_end - x_end).abs();
+    eprintln!(
+        "node[7].x: FMU {:.17e}, library {x_end:.17e}, |diff| {diff:e}",
+        run.x_end
+    );
+    assert_eq!(run.x_start, x_start, "same start geometry");
+    assert!(diff <= 1e-12, "FMU and library differ by {diff:e} m");
+    assert!((run.length_error - sim.length_error()).abs() <= 1e-12);
+}
