@@ -6,7 +6,7 @@ bash tests/setup.sh
 cargo build --release --workspace
 fmu=$(./target/release/tensegrity-fmu build -o prism2.fmu)
 echo "== built $fmu"
-.venv/bin/fmpy info "$fmu" | head -20
+.venv/bin/fmpy info "$fmu" | sed -n "1,20p"
 .venv/bin/fmpy simulate "$fmu" --output-file prism2-out.csv \
   --output-variables node[7].x node[7].z cable[1].tension constraint.length_error energy.total
 echo "== wrote prism2-out.csv:"
