@@ -52,6 +52,14 @@ pub enum StepError {
         /// Which quantity became non-finite.
         what: String,
     },
+    /// The adaptive method cannot meet its tolerances.
+    #[error("the adaptive step size fell to {step:e} s at t = {time} s without meeting solver.rtol/solver.atol; the state was kept at the last good point. Loosen the tolerances or check for a discontinuity")]
+    StepSizeUnderflow {
+        /// Time of the failed attempt.
+        time: f64,
+        /// The step that was too small.
+        step: f64,
+    },
     /// An input holds a NaN or an infinity.
     #[error("input {name} is not finite ({value})")]
     NonFiniteInput {

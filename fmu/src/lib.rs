@@ -229,10 +229,17 @@ pub unsafe extern "C" fn fmi2GetInteger(
     c: fmi2Component,
     vr: *const fmi2ValueReference,
     nvr: usize,
-    _value: *mut fmi2Integer,
+    value: *mut fmi2Integer,
 ) -> fmi2Status {
     call(c, "fmi2GetInteger", |i| {
-        i.untyped("fmi2GetInteger", slice(vr, nvr, "fmi2GetInteger: vr")?)
+        let vrs = slice(vr, nvr, "fmi2GetInteger: vr")?;
+        let out = slice_mut(value, nvr, "fmi2GetInteger: value")?;
+        let mut reals = vec![0.0; nvr];
+        let s = i.get("fmi2GetInteger", BaseType::Enumeration, vrs, &mut reals)?;
+        for (o, r) in out.iter_mut().zip(reals) {
+            *o = r as fmi2Integer;
+        }
+        Ok(s)
     })
 }
 
@@ -284,10 +291,15 @@ pub unsafe extern "C" fn fmi2SetInteger(
     c: fmi2Component,
     vr: *const fmi2ValueReference,
     nvr: usize,
-    _value: *const fmi2Integer,
+    value: *const fmi2Integer,
 ) -> fmi2Status {
     call(c, "fmi2SetInteger", |i| {
-        i.untyped("fmi2SetInteger", slice(vr, nvr, "fmi2SetInteger: vr")?)
+        let vrs = slice(vr, nvr, "fmi2SetInteger: vr")?;
+        let values: Vec<f64> = slice(value, nvr, "fmi2SetInteger: value")?
+            .iter()
+            .map(|&v| f64::from(v))
+            .collect();
+        i.set("fmi2SetInteger", BaseType::Enumeration, vrs, &values)
     })
 }
 

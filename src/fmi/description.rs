@@ -2,8 +2,9 @@
 
 use fmi2_model_description as md;
 
-use super::variables::{BaseType, Binding, VariableTable, UNITS};
+use super::variables::{BaseType, Binding, VariableTable, METHOD_TYPE, UNITS};
 use super::Category;
+use crate::integrator::Method;
 use crate::model::Model;
 
 /// Name of the shared library inside `binaries/linux64/` (without `.so`).
@@ -43,6 +44,10 @@ pub fn model_description(model: &Model, table: &VariableTable, guid: &str) -> md
                 },
                 BaseType::Boolean => md::VariableKind::Boolean {
                     start: v.start.map(|s| s != 0.0),
+                },
+                BaseType::Enumeration => md::VariableKind::Enumeration {
+                    declared_type: METHOD_TYPE.to_string(),
+                    start: v.start.map(|s| s as i32),
                 },
             },
         })
@@ -87,7 +92,21 @@ pub fn model_description(model: &Model, table: &VariableTable, guid: &str) -> md
                 },
             })
             .collect(),
-        type_definitions: Vec::new(),
+        type_definitions: vec![md::SimpleType {
+            name: METHOD_TYPE.to_string(),
+            description: Some("integration method".to_string()),
+            kind: md::SimpleTypeKind::Enumeration {
+                items: Method::ALL
+                    .iter()
+                    .enumerate()
+                    .map(|(i, m)| md::EnumerationItem {
+                        name: m.name().to_string(),
+                        value: i as i32 + 1,
+                        description: Some(m.description().to_string()),
+                    })
+                    .collect(),
+            },
+        }],
         log_categories: Category::ALL
             .iter()
             .map(|c| md::LogCategory {

@@ -8,6 +8,7 @@ use std::path::Path;
 use super::snapshot::Snapshot;
 use super::variables::{BaseType, Binding, VariableTable};
 use super::{guid_for, Category, Message, Mode, Status};
+use crate::integrator::Method;
 use crate::model::Model;
 use crate::scene::Scene;
 use crate::sim::Simulation;
@@ -324,7 +325,7 @@ impl Instance {
         match vrs.first() {
             None => Ok(Status::Ok),
             Some(vr) => Err(error(format!(
-                "{call}: value reference {vr} is not a variable of this type (this FMU has only Real and Boolean variables)"
+                "{call}: value reference {vr} is not a variable of this type (this FMU has no String variables)"
             ))),
         }
     }
@@ -373,6 +374,14 @@ impl Instance {
                     next.force_density[k] = value;
                 }
                 Binding::NodeForce(k, axis) => next.node_force[k][axis] = value,
+                Binding::Method
+                    if !(1..=Method::ALL.len()).contains(&(value as usize))
+                        || value.fract() != 0.0 =>
+                {
+                    return Err(error(format!(
+                        "{call}: {name} = {value} is not a method (1 = rk4, 2 = dopri5, 3 = rattle)"
+                    )));
+                }
                 _ => {
                     apply_parameter(&mut next.scene, binding, value);
                     next.scene
@@ -409,35 +418,17 @@ impl Instance {
                 )));
             }
         }
-        let dt = self.core.scene.solver.step_size;
-        let n = ((h / dt) - 1e-9).ceil().max(1.0) as u64;
-        let before = self.core.sim.state().clone();
-        for k in 0..n {
-            let t0 = t + k as f64 * dt;
-            let t1 = if k + 1 == n {
-                end
-            } else {
-                t + (k + 1) as f64 * dt
-            };
-            // Full steps use dt itself, so any split into communication steps that
-            // lands on the grid takes bit-identical internal steps.
-            let rest = end - t0;
-            let step = if k + 1 < n || (rest - dt).abs() <= 1e-9 * dt {
-                dt
-            } else {
-                rest
-            };
-            if let Err(e) = self.core.sim.step(t0, step, t1) {
-                self.core.sim.set_state(before);
-                return Err(error(format!("fmi2DoStep: {e}")));
-            }
-        }
+        let steps = self
+            .core
+            .sim
+            .advance_to(end)
+            .map_err(|e| error(format!("fmi2DoStep: {e}")))?;
         self.core.time = end;
         self.core.stale = true;
         if self.logging[Category::Events as usize] {
             self.log(
                 Category::Events,
-                format!("fmi2DoStep: {t} -> {end} s in {n} internal steps"),
+                format!("fmi2DoStep: {t} -> {end} s in {steps} internal steps"),
             );
         }
         Ok(Status::Ok)
@@ -520,6 +511,12 @@ impl Core {
             Binding::NodeForce(k, axis) => sim.inputs.node_force[k][axis],
             Binding::StepSize => core.scene.solver.step_size,
             Binding::Correction => f64::from(u8::from(core.scene.solver.correction)),
+            Binding::Method => {
+                let m = core.scene.solver.method;
+                (Method::ALL.iter().position(|&x| x == m).unwrap_or(0) + 1) as f64
+            }
+            Binding::Rtol => core.scene.solver.rtol,
+            Binding::Atol => core.scene.solver.atol,
             Binding::Stiffness(j) => core.scene.cables[j].stiffness.unwrap_or(0.0),
             Binding::RestLength(j) => core.scene.cables[j].rest_length.unwrap_or(0.0),
             Binding::Damping(j) => core.scene.cables[j].damping.unwrap_or(0.0),
@@ -551,6 +548,13 @@ pub(super) fn apply_parameter(scene: &mut Scene, binding: Binding, value: f64) {
     match binding {
         Binding::StepSize => scene.solver.step_size = value,
         Binding::Correction => scene.solver.correction = value != 0.0,
+        Binding::Method => {
+            if let Some(&m) = Method::ALL.get((value as usize).wrapping_sub(1)) {
+                scene.solver.method = m;
+            }
+        }
+        Binding::Rtol => scene.solver.rtol = value,
+        Binding::Atol => scene.solver.atol = value,
         Binding::Stiffness(j) => scene.cables[j].stiffness = Some(value),
         Binding::RestLength(j) => scene.cables[j].rest_length = Some(value),
         Binding::Damping(j) => scene.cables[j].damping = Some(value),

@@ -4,6 +4,7 @@
 
 use fmi2_model_description::{Causality, Initial, Variability};
 
+use crate::integrator::Method;
 use crate::model::{CableLaw, Model};
 use crate::outputs::{self, Quantity};
 use crate::sim::Simulation;
@@ -21,6 +22,12 @@ pub enum Binding {
     StepSize,
     /// `solver.correction`.
     Correction,
+    /// `solver.method` (enumeration value = 1-based index in `Method::ALL`).
+    Method,
+    /// `solver.rtol`.
+    Rtol,
+    /// `solver.atol`.
+    Atol,
     /// Stiffness of elastic cable `j`.
     Stiffness(usize),
     /// Rest length of elastic cable `j`.
@@ -38,7 +45,12 @@ pub enum BaseType {
     Real,
     /// `fmi2Boolean`.
     Boolean,
+    /// An enumeration, accessed as `fmi2Integer`.
+    Enumeration,
 }
+
+/// Declared type of `solver.method`.
+pub const METHOD_TYPE: &str = "SolverMethod";
 
 /// One FMU variable.
 #[derive(Debug, Clone, PartialEq)]
@@ -133,10 +145,10 @@ fn parameter(
     Variable {
         name,
         value_reference: 0,
-        base_type: if binding == Binding::Correction {
-            BaseType::Boolean
-        } else {
-            BaseType::Real
+        base_type: match binding {
+            Binding::Correction => BaseType::Boolean,
+            Binding::Method => BaseType::Enumeration,
+            _ => BaseType::Real,
         },
         causality: Causality::Parameter,
         variability: Variability::Fixed,
@@ -162,6 +174,29 @@ fn parameters(model: &Model, vars: &mut Vec<Variable>) {
         "apply the exact bar-length and orthogonality correction after every internal step".into(),
         f64::from(u8::from(model.solver.correction)),
         Binding::Correction,
+    ));
+    let method = model.solver.method;
+    vars.push(parameter(
+        "solver.method".into(),
+        None,
+        "integration method: 1 = rk4, 2 = dopri5 (adaptive), 3 = rattle".into(),
+        (Method::ALL.iter().position(|&m| m == method).unwrap_or(0) + 1) as f64,
+        Binding::Method,
+    ));
+    vars.push(parameter(
+        "solver.rtol".into(),
+        None,
+        "relative tolerance of the adaptive method (dopri5)".into(),
+        model.solver.rtol,
+        Binding::Rtol,
+    ));
+    vars.push(parameter(
+        "solver.atol".into(),
+        None,
+        "absolute tolerance of the adaptive method (dopri5), on positions (m) and velocities (m/s)"
+            .into(),
+        model.solver.atol,
+        Binding::Atol,
     ));
     for (j, cable) in model.cables.iter().enumerate() {
         if let CableLaw::Elastic {

@@ -1,24 +1,108 @@
-//! Time integration of `ẏ = f(t, y)` behind one pluggable step interface. The correction
-//! runs after each step, outside the integrator.
+//! Time integration of `ẏ = f(t, y)` behind one pluggable step interface. The exact
+//! correction runs after each accepted step, outside the integrator; a method that needs
+//! the position projection inside its step (RATTLE-type) asks the right-hand side for it.
 
+mod dopri5;
+mod rattle;
 mod rk4;
 
+pub use dopri5::Dopri5;
+pub use rattle::Rattle;
 pub use rk4::Rk4;
 
-/// A right-hand side `f(t, y)`.
+use serde::{Deserialize, Serialize};
+
+/// A right-hand side `f(t, y)`, with `y = [q; v]`.
 pub trait Rhs {
     /// Writes `f(t, y)` into `dy`.
     fn eval(&mut self, t: f64, y: &[f64], dy: &mut [f64]);
+    /// Projects the positions of `y` onto the constraints (no-op when correction is off).
+    fn project_positions(&mut self, _y: &mut [f64]) {}
+}
+
+/// What an attempted step did.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Outcome {
+    /// `y` now holds the solution at `t + h`; `next` is the proposed next step.
+    Accepted {
+        /// Proposed next step, s.
+        next: f64,
+    },
+    /// The error estimate was too large; `y` is unchanged. Retry with `next`.
+    Rejected {
+        /// Proposed retry step, s.
+        next: f64,
+    },
 }
 
 /// One step of a one-step method; buffers are owned by the integrator and sized once.
 pub trait Integrator: Send {
-    /// Advances `y` from `t` to `t + h` in place.
-    fn step(&mut self, rhs: &mut dyn Rhs, t: f64, y: &mut [f64], h: f64);
+    /// Attempts a step of `h` from `t`, updating `y` in place when accepted.
+    fn attempt(&mut self, rhs: &mut dyn Rhs, t: f64, y: &mut [f64], h: f64) -> Outcome;
+    /// True if the method chooses its own steps from `rtol`/`atol`.
+    fn adaptive(&self) -> bool;
+    /// Forgets values carried between steps (the state was changed from outside).
+    fn invalidate(&mut self) {}
+    /// The exact correction just moved the accepted state; by default forget carried
+    /// values, since they belong to the uncorrected state.
+    fn after_correction(&mut self) {
+        self.invalidate();
+    }
     /// Short name, as used in reports.
     fn name(&self) -> &'static str;
     /// Right-hand-side evaluations so far.
     fn rhs_evaluations(&self) -> u64;
     /// A boxed copy (for FMU state snapshots).
     fn boxed_clone(&self) -> Box<dyn Integrator>;
+}
+
+/// The integration methods a scene, the CLI or an FMU parameter can choose.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Method {
+    /// Classical fixed-step fourth-order Runge–Kutta (4 evaluations per step).
+    #[default]
+    Rk4,
+    /// Adaptive Dormand–Prince 5(4) with `rtol`/`atol` (6–7 evaluations per step).
+    Dopri5,
+    /// Fixed-step second-order velocity Verlet with the exact position projection inside
+    /// the step (RATTLE-type, 1 evaluation per step).
+    Rattle,
+}
+
+impl Method {
+    /// Every method, in FMU enumeration order (values 1, 2, 3).
+    pub const ALL: [Method; 3] = [Method::Rk4, Method::Dopri5, Method::Rattle];
+
+    /// The name used in scenes, on the command line and in reports.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Rk4 => "rk4",
+            Self::Dopri5 => "dopri5",
+            Self::Rattle => "rattle",
+        }
+    }
+
+    /// One line on what it is.
+    pub fn description(self) -> &'static str {
+        match self {
+            Self::Rk4 => "classical fixed-step 4th-order Runge-Kutta, 4 evaluations per step",
+            Self::Dopri5 => "adaptive Dormand-Prince 5(4) controlled by solver.rtol and solver.atol; solver.step_size is the first trial step",
+            Self::Rattle => "fixed-step 2nd-order velocity Verlet with the exact position projection inside the step (RATTLE-type), 1 evaluation per step",
+        }
+    }
+
+    /// The method with this name.
+    pub fn from_name(name: &str) -> Option<Self> {
+        Self::ALL.into_iter().find(|m| m.name() == name)
+    }
+
+    /// A fresh integrator for a state of length `n`.
+    pub fn integrator(self, n: usize, rtol: f64, atol: f64) -> Box<dyn Integrator> {
+        match self {
+            Self::Rk4 => Box::new(Rk4::new(n)),
+            Self::Dopri5 => Box::new(Dopri5::new(n, rtol, atol)),
+            Self::Rattle => Box::new(Rattle::new(n)),
+        }
+    }
 }

@@ -1,6 +1,6 @@
 //! Classical fixed-step fourth-order Runge–Kutta.
 
-use super::{Integrator, Rhs};
+use super::{Integrator, Outcome, Rhs};
 
 /// RK4 with preallocated stage buffers.
 #[derive(Debug, Clone)]
@@ -22,7 +22,7 @@ impl Rk4 {
 }
 
 impl Integrator for Rk4 {
-    fn step(&mut self, rhs: &mut dyn Rhs, t: f64, y: &mut [f64], h: f64) {
+    fn attempt(&mut self, rhs: &mut dyn Rhs, t: f64, y: &mut [f64], h: f64) -> Outcome {
         let [k1, k2, k3, k4] = &mut self.k;
         rhs.eval(t, y, k1);
         for ((s, y), k) in self.stage.iter_mut().zip(y.iter()).zip(k1.iter()) {
@@ -41,6 +41,11 @@ impl Integrator for Rk4 {
             *y += h / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i]);
         }
         self.evaluations += 4;
+        Outcome::Accepted { next: h }
+    }
+
+    fn adaptive(&self) -> bool {
+        false
     }
 
     fn name(&self) -> &'static str {

@@ -12,6 +12,7 @@ use serde::{Deserialize, Serialize};
 use std::path::Path;
 
 use crate::error::SceneError;
+use crate::integrator::Method;
 
 /// A whole scene as read from a file.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -106,6 +107,12 @@ pub struct SolverSpec {
     pub step_size: f64,
     /// Apply the paper's constraint correction after every step.
     pub correction: bool,
+    /// Integration method.
+    pub method: Method,
+    /// Relative tolerance of the adaptive method.
+    pub rtol: f64,
+    /// Absolute tolerance of the adaptive method (m and m/s).
+    pub atol: f64,
 }
 
 impl Default for SolverSpec {
@@ -113,6 +120,9 @@ impl Default for SolverSpec {
         Self {
             step_size: 1e-3,
             correction: true,
+            method: Method::Rk4,
+            rtol: 1e-6,
+            atol: 1e-9,
         }
     }
 }

@@ -128,6 +128,21 @@ pub(super) fn validate(scene: &Scene) -> Result<(), SceneError> {
             format!("must be positive, got {}", scene.solver.step_size),
         ));
     }
+    for (key, v) in [
+        ("solver.rtol", scene.solver.rtol),
+        ("solver.atol", scene.solver.atol),
+    ] {
+        finite(key, v)?;
+        if v < 0.0 {
+            return Err(SceneError::invalid(key, format!("must be ≥ 0, got {v}")));
+        }
+    }
+    if scene.solver.rtol == 0.0 && scene.solver.atol == 0.0 {
+        return Err(SceneError::invalid(
+            "solver.rtol",
+            "solver.rtol and solver.atol cannot both be 0",
+        ));
+    }
     Ok(())
 }
 

@@ -6,8 +6,10 @@ use nalgebra::Vector3;
 
 use crate::dynamics::{self, energy, Inputs, Workspace};
 use crate::error::StepError;
-use crate::integrator::{Integrator, Rhs, Rk4};
+use crate::integrator::{Integrator, Rhs};
 use crate::model::Model;
+
+mod stepping;
 
 /// The integrated state.
 #[derive(Debug, Clone, PartialEq)]
@@ -18,6 +20,15 @@ pub struct State {
     pub y: Vec<f64>,
 }
 
+/// Counters of the work done so far.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct Stats {
+    /// Accepted steps.
+    pub steps: u64,
+    /// Rejected steps (adaptive methods).
+    pub rejected: u64,
+}
+
 /// Model + state + inputs + workspace + integrator.
 pub struct Simulation {
     model: Model,
@@ -25,6 +36,10 @@ pub struct Simulation {
     pub inputs: Inputs,
     state: State,
     last_good: Vec<f64>,
+    advance_start: State,
+    /// Next trial step of an adaptive method, s.
+    h_next: f64,
+    stats: Stats,
     ws: Workspace,
     acc: Vec<f64>,
     integrator: Box<dyn Integrator>,
@@ -40,6 +55,9 @@ impl Clone for Simulation {
             inputs: self.inputs.clone(),
             state: self.state.clone(),
             last_good: self.last_good.clone(),
+            advance_start: self.advance_start.clone(),
+            h_next: self.h_next,
+            stats: self.stats,
             ws: self.ws.clone(),
             acc: self.acc.clone(),
             integrator: self.integrator.boxed_clone(),
@@ -49,10 +67,12 @@ impl Clone for Simulation {
     }
 }
 
+/// The right-hand side seen by the integrators.
 struct System<'a> {
     model: &'a Model,
     inputs: &'a Inputs,
     ws: &'a mut Workspace,
+    correction: bool,
 }
 
 impl Rhs for System<'_> {
@@ -63,12 +83,23 @@ impl Rhs for System<'_> {
         dq.copy_from_slice(v);
         dynamics::accelerations(self.model, self.inputs, q, v, self.ws, dv);
     }
+
+    fn project_positions(&mut self, y: &mut [f64]) {
+        if self.correction {
+            let half = y.len() / 2;
+            let coords = &self.model.coords;
+            self.model
+                .correction
+                .correct_positions(coords, &mut y[..half]);
+        }
+    }
 }
 
 impl Simulation {
-    /// Starts at the scene's geometry and (projected) velocities with RK4.
+    /// Starts at the scene's geometry and (projected) velocities with the scene's method.
     pub fn new(model: Model) -> Self {
-        let integrator = Box::new(Rk4::new(model.state_len()));
+        let s = &model.solver;
+        let integrator = s.method.integrator(model.state_len(), s.rtol, s.atol);
         Self::with_integrator(model, integrator)
     }
 
@@ -81,8 +112,14 @@ impl Simulation {
         let mut sim = Self {
             inputs: Inputs::start(&model),
             correction: model.solver.correction,
+            advance_start: State {
+                time: 0.0,
+                y: y.clone(),
+            },
             state: State { time: 0.0, y },
             last_good: vec![0.0; n],
+            h_next: model.solver.step_size,
+            stats: Stats::default(),
             ws,
             acc: vec![0.0; n / 2],
             integrator,
@@ -112,7 +149,13 @@ impl Simulation {
     pub fn set_state(&mut self, state: State) {
         assert_eq!(state.y.len(), self.state.y.len(), "state length");
         self.state = state;
+        self.integrator.invalidate();
         self.refresh();
+    }
+
+    /// Steps taken and rejected so far.
+    pub fn stats(&self) -> Stats {
+        self.stats
     }
 
     /// Current time in s.
@@ -130,58 +173,7 @@ impl Simulation {
         self.integrator.as_ref()
     }
 
-    /// Takes `n` steps of `h` from the current time; time is `t₀ + k h`, not a running sum.
-    pub fn advance(&mut self, n: u64, h: f64) -> Result<(), StepError> {
-        let t0 = self.state.time;
-        for k in 0..n {
-            self.step_to(t0 + k as f64 * h, t0 + (k + 1) as f64 * h)?;
-        }
-        Ok(())
-    }
-
-    /// One step from `t` to `t_next`. On failure the state stays at `t`.
-    pub fn step_to(&mut self, t: f64, t_next: f64) -> Result<(), StepError> {
-        self.step(t, t_next - t, t_next)
-    }
-
-    /// One step of exactly `h` from `t`, after which the time is `t_next` (≈ `t + h`; a
-    /// caller on a fixed grid passes both so that round-off in `t_next − t` cannot make
-    /// otherwise identical runs differ).
-    pub fn step(&mut self, t: f64, h: f64, t_next: f64) -> Result<(), StepError> {
-        self.check_inputs()?;
-        self.last_good.copy_from_slice(&self.state.y);
-        let mut system = System {
-            model: &self.model,
-            inputs: &self.inputs,
-            ws: &mut self.ws,
-        };
-        self.integrator.step(&mut system, t, &mut self.state.y, h);
-        if self.correction {
-            self.correct();
-        }
-        if let Some(i) = self.state.y.iter().position(|x| !x.is_finite()) {
-            self.state.y.copy_from_slice(&self.last_good);
-            self.refresh();
-            let half = self.state.y.len() / 2;
-            let what = if i < half { "position" } else { "velocity" };
-            return Err(StepError::NonFinite {
-                time: t,
-                what: format!("reduced {what} component {}", i % half + 1),
-            });
-        }
-        self.state.time = t_next;
-        Ok(())
-    }
-
-    fn correct(&mut self) {
-        let half = self.state.y.len() / 2;
-        let (q, v) = self.state.y.split_at_mut(half);
-        let plan = &self.model.correction;
-        plan.correct_positions(&self.model.coords, q);
-        plan.correct_velocities(&self.model.coords, q, v);
-    }
-
-    fn check_inputs(&self) -> Result<(), StepError> {
+    pub(crate) fn check_inputs(&self) -> Result<(), StepError> {
         for (k, &g) in self.inputs.force_density.iter().enumerate() {
             if !g.is_finite() {
                 return Err(StepError::NonFiniteInput {

@@ -92,6 +92,9 @@ def expected_variables(scene):
     out["energy.total"] = ("output", "J")
     out["solver.step_size"] = ("parameter", "s")
     out["solver.correction"] = ("parameter", None)
+    out["solver.method"] = ("parameter", None)
+    out["solver.rtol"] = ("parameter", None)
+    out["solver.atol"] = ("parameter", None)
     return out
 
 
@@ -180,6 +183,11 @@ def test_builtin_parameter_starts_match_scene(builtin):
     solver = scene.get("solver", {})
     assert float(v["solver.step_size"].start) == solver.get("step_size", 0.001)
     assert v["solver.correction"].start == str(solver.get("correction", True)).lower()
+    methods = {"rk4": 1, "dopri5": 2, "rattle": 3}
+    assert v["solver.method"].type == "Enumeration"
+    assert int(v["solver.method"].start) == methods[solver.get("method", "rk4")]
+    assert float(v["solver.rtol"].start) == solver.get("rtol", 1e-6)
+    assert float(v["solver.atol"].start) == solver.get("atol", 1e-9)
     for k, bar in enumerate(scene["bars"], start=1):
         assert float(v[f"bar[{k}].mass"].start) == bar["mass"]
     for j, cable in enumerate(scene.get("cables", []), start=1):

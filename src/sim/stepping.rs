@@ -1,0 +1,163 @@
+//! Advancing a simulation: fixed steps on a grid or adaptive steps clipped to the target,
+//! each accepted step followed by the exact correction and a finiteness check. A failed
+//! advance leaves the state where it began.
+
+use super::{Simulation, System};
+use crate::error::StepError;
+use crate::integrator::Outcome;
+
+/// Communication points closer than this (relative) count as reached.
+const TIME_EPS: f64 = 1e-12;
+
+impl Simulation {
+    /// Takes `n` steps of `h` from the current time; time is `t₀ + k h`, not a running sum.
+    pub fn advance(&mut self, n: u64, h: f64) -> Result<(), StepError> {
+        let t0 = self.state.time;
+        for k in 0..n {
+            self.step_to(t0 + k as f64 * h, t0 + (k + 1) as f64 * h)?;
+        }
+        Ok(())
+    }
+
+    /// One step from `t` to `t_next`. On failure the state stays at `t`.
+    pub fn step_to(&mut self, t: f64, t_next: f64) -> Result<(), StepError> {
+        self.step(t, t_next - t, t_next)
+    }
+
+    /// One step of exactly `h` from `t`, after which the time is `t_next` (≈ `t + h`; a
+    /// caller on a fixed grid passes both so that round-off in `t_next − t` cannot make
+    /// otherwise identical runs differ). An adaptive method takes its own steps to
+    /// `t_next`.
+    pub fn step(&mut self, t: f64, h: f64, t_next: f64) -> Result<(), StepError> {
+        if self.integrator.adaptive() {
+            self.state.time = t;
+            return self.advance_to(t_next).map(|_| ());
+        }
+        self.check_inputs()?;
+        self.last_good.copy_from_slice(&self.state.y);
+        self.attempt(t, h)?;
+        self.state.time = t_next;
+        Ok(())
+    }
+
+    /// Integrates from the current time to `t_end`: a fixed-step method in steps of
+    /// `solver.step_size` on a grid from the current time (the last one shortened to meet
+    /// `t_end`), an adaptive one with its own steps, the last clipped to `t_end`.
+    /// Returns the number of accepted steps; on failure the state is left as it was.
+    pub fn advance_to(&mut self, t_end: f64) -> Result<u64, StepError> {
+        self.check_inputs()?;
+        self.advance_start.time = self.state.time;
+        self.advance_start.y.copy_from_slice(&self.state.y);
+        let result = if self.integrator.adaptive() {
+            self.advance_adaptive(t_end)
+        } else {
+            self.advance_grid(t_end)
+        };
+        if result.is_err() {
+            self.state.time = self.advance_start.time;
+            self.state.y.copy_from_slice(&self.advance_start.y);
+            self.integrator.invalidate();
+            self.refresh();
+        }
+        result
+    }
+
+    fn advance_grid(&mut self, t_end: f64) -> Result<u64, StepError> {
+        let t = self.state.time;
+        let dt = self.model.solver.step_size;
+        let n = (((t_end - t) / dt) - 1e-9).ceil().max(1.0) as u64;
+        for k in 0..n {
+            let t0 = t + k as f64 * dt;
+            let t1 = if k + 1 == n {
+                t_end
+            } else {
+                t + (k + 1) as f64 * dt
+            };
+            // Full steps use dt itself, so any split into communication steps that lands
+            // on the grid takes bit-identical internal steps.
+            let rest = t_end - t0;
+            let h = if k + 1 < n || (rest - dt).abs() <= 1e-9 * dt {
+                dt
+            } else {
+                rest
+            };
+            self.last_good.copy_from_slice(&self.state.y);
+            self.attempt(t0, h)?;
+            self.state.time = t1;
+        }
+        Ok(n)
+    }
+
+    fn advance_adaptive(&mut self, t_end: f64) -> Result<u64, StepError> {
+        let mut accepted = 0;
+        loop {
+            let t = self.state.time;
+            let rest = t_end - t;
+            if rest <= TIME_EPS * t_end.abs().max(1.0) {
+                self.state.time = t_end;
+                return Ok(accepted);
+            }
+            let last = self.h_next >= rest * (1.0 - TIME_EPS);
+            let h = if last { rest } else { self.h_next };
+            if h <= 1e-14 * t.abs().max(1.0) {
+                return Err(StepError::StepSizeUnderflow { time: t, step: h });
+            }
+            self.last_good.copy_from_slice(&self.state.y);
+            match self.attempt(t, h)? {
+                Outcome::Accepted { next } => {
+                    accepted += 1;
+                    self.state.time = if last { t_end } else { t + h };
+                    // A step clipped to the target says nothing about the natural step.
+                    if !last || next < self.h_next {
+                        self.h_next = next;
+                    }
+                }
+                Outcome::Rejected { next } => {
+                    self.stats.rejected += 1;
+                    self.h_next = next;
+                }
+            }
+        }
+    }
+
+    /// One attempt from `t` with step `h`, then the correction and the finiteness check.
+    fn attempt(&mut self, t: f64, h: f64) -> Result<Outcome, StepError> {
+        let mut system = System {
+            model: &self.model,
+            inputs: &self.inputs,
+            ws: &mut self.ws,
+            correction: self.correction,
+        };
+        let outcome = self
+            .integrator
+            .attempt(&mut system, t, &mut self.state.y, h);
+        if let Outcome::Rejected { .. } = outcome {
+            return Ok(outcome);
+        }
+        if self.correction {
+            self.correct();
+            self.integrator.after_correction();
+        }
+        if let Some(i) = self.state.y.iter().position(|x| !x.is_finite()) {
+            self.state.y.copy_from_slice(&self.last_good);
+            self.integrator.invalidate();
+            self.refresh();
+            let half = self.state.y.len() / 2;
+            let what = if i < half { "position" } else { "velocity" };
+            return Err(StepError::NonFinite {
+                time: t,
+                what: format!("reduced {what} component {}", i % half + 1),
+            });
+        }
+        self.stats.steps += 1;
+        Ok(outcome)
+    }
+
+    fn correct(&mut self) {
+        let half = self.state.y.len() / 2;
+        let (q, v) = self.state.y.split_at_mut(half);
+        let plan = &self.model.correction;
+        plan.correct_positions(&self.model.coords, q);
+        plan.correct_velocities(&self.model.coords, q, v);
+    }
+}
