@@ -108,6 +108,35 @@ impl CorrectionPlan {
         }
     }
 
+    /// Restores `|b_i| = l_i` like [`Self::correct_positions`], but moving each bar along
+    /// its direction at the start of the step, `b_i(q_old)` (SHAKE): with that choice a
+    /// kick–drift–kick step is RATTLE, whose energy error stays bounded. Falls back to the
+    /// radial move when the step was too large for a root to exist.
+    pub fn correct_positions_shake(&self, coords: &Coordinates, q: &mut [f64], q_old: &[f64]) {
+        for (bar, dir) in self.directions.iter().enumerate() {
+            if dir.is_empty() {
+                continue;
+            }
+            let b = bar_vector(coords, bar, q, true);
+            let b0 = bar_vector(coords, bar, q_old, true);
+            let l = self.lengths[bar];
+            // |b + μ b0|² = l², the root nearest 0.
+            let (a2, a1, a0) = (b0.norm_squared(), b.dot(&b0), b.norm_squared() - l * l);
+            let disc = a1 * a1 - a2 * a0;
+            let delta = if disc >= 0.0 && a2 > 0.0 {
+                let mu = if a1 >= 0.0 {
+                    -a0 / (a1 + disc.sqrt())
+                } else {
+                    (-a1 + disc.sqrt()) / a2
+                };
+                b0 * mu
+            } else {
+                b * (l / b.norm()) - b
+            };
+            apply(dir, &delta, q);
+        }
+    }
+
     /// Restores `b_i · ḃ_i = 0` for every bar, in order (positions already corrected).
     pub fn correct_velocities(&self, coords: &Coordinates, q: &[f64], v: &mut [f64]) {
         for (bar, dir) in self.directions.iter().enumerate() {

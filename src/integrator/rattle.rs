@@ -1,8 +1,10 @@
-//! A RATTLE-type second-order method: velocity Verlet (kick–drift–kick) whose drift is
-//! followed by the exact position projection, with one evaluation of the constrained
-//! acceleration per step. The closing kick needs `a(q₁, v₁)`, which depends on `v₁`
-//! through the centrifugal part of λ and cable damping; it is evaluated at the
-//! predicted `v₁ ≈ v½ + h/2 a₀` (error O(h²), so the method stays second order) and
+//! RATTLE: velocity Verlet (kick–drift–kick) whose drift is projected back onto the bar
+//! lengths along the bars' directions at the start of the step (SHAKE), and whose closing
+//! kick is followed by the velocity projection (the correction), with one evaluation of
+//! the constrained acceleration per step. Components of the acceleration along the bars
+//! are absorbed by the projections, so λ's centrifugal term drops out as in RATTLE. The
+//! closing kick needs `a(q₁, v₁)`, which still depends on `v₁` through cable damping; it is
+//! evaluated at the predicted `v₁ ≈ v½ + h/2 a₀` (error O(h²), second order kept) and
 //! reused as the next step's opening kick.
 
 use super::{Integrator, Outcome, Rhs};
@@ -38,6 +40,7 @@ impl Integrator for Rattle {
             rhs.eval(t, y, &mut self.f);
             self.evaluations += 1;
         }
+        self.stage.copy_from_slice(y);
         // Kick: v½ = v + h/2 a.
         let (q, v) = y.split_at_mut(half);
         let a = &self.f[half..];
@@ -48,7 +51,7 @@ impl Integrator for Rattle {
         for (qi, vi) in q.iter_mut().zip(v.iter()) {
             *qi += h * vi;
         }
-        rhs.project_positions(y);
+        rhs.project_positions(y, &self.stage);
         // Acceleration at the new positions and the predicted new velocity.
         self.stage.copy_from_slice(y);
         for (si, ai) in self.stage[half..].iter_mut().zip(&self.f[half..]) {

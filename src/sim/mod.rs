@@ -84,13 +84,12 @@ impl Rhs for System<'_> {
         dynamics::accelerations(self.model, self.inputs, q, v, self.ws, dv);
     }
 
-    fn project_positions(&mut self, y: &mut [f64]) {
+    fn project_positions(&mut self, y: &mut [f64], before: &[f64]) {
         if self.correction {
             let half = y.len() / 2;
             let coords = &self.model.coords;
-            self.model
-                .correction
-                .correct_positions(coords, &mut y[..half]);
+            let plan = &self.model.correction;
+            plan.correct_positions_shake(coords, &mut y[..half], &before[..half]);
         }
     }
 }
