@@ -374,10 +374,7 @@ impl Instance {
                     next.force_density[k] = value;
                 }
                 Binding::NodeForce(k, axis) => next.node_force[k][axis] = value,
-                Binding::Method
-                    if !(1..=Method::ALL.len()).contains(&(value as usize))
-                        || value.fract() != 0.0 =>
-                {
+                Binding::Method if Method::from_fmi_value(value).is_none() => {
                     return Err(error(format!(
                         "{call}: {name} = {value} is not a method (1 = rk4, 2 = dopri5, 3 = rattle)"
                     )));
@@ -511,10 +508,7 @@ impl Core {
             Binding::NodeForce(k, axis) => sim.inputs.node_force[k][axis],
             Binding::StepSize => core.scene.solver.step_size,
             Binding::Correction => f64::from(u8::from(core.scene.solver.correction)),
-            Binding::Method => {
-                let m = core.scene.solver.method;
-                (Method::ALL.iter().position(|&x| x == m).unwrap_or(0) + 1) as f64
-            }
+            Binding::Method => f64::from(core.scene.solver.method.fmi_value()),
             Binding::Rtol => core.scene.solver.rtol,
             Binding::Atol => core.scene.solver.atol,
             Binding::Stiffness(j) => core.scene.cables[j].stiffness.unwrap_or(0.0),
@@ -549,7 +543,7 @@ pub(super) fn apply_parameter(scene: &mut Scene, binding: Binding, value: f64) {
         Binding::StepSize => scene.solver.step_size = value,
         Binding::Correction => scene.solver.correction = value != 0.0,
         Binding::Method => {
-            if let Some(&m) = Method::ALL.get((value as usize).wrapping_sub(1)) {
+            if let Some(m) = Method::from_fmi_value(value) {
                 scene.solver.method = m;
             }
         }

@@ -4,7 +4,6 @@
 
 use fmi2_model_description::{Causality, Initial, Variability};
 
-use crate::integrator::Method;
 use crate::model::{CableLaw, Model};
 use crate::outputs::{self, Quantity};
 use crate::sim::Simulation;
@@ -180,7 +179,7 @@ fn parameters(model: &Model, vars: &mut Vec<Variable>) {
         "solver.method".into(),
         None,
         "integration method: 1 = rk4, 2 = dopri5 (adaptive), 3 = rattle".into(),
-        (Method::ALL.iter().position(|&m| m == method).unwrap_or(0) + 1) as f64,
+        f64::from(method.fmi_value()),
         Binding::Method,
     ));
     vars.push(parameter(

@@ -93,6 +93,22 @@ impl Method {
         }
     }
 
+    /// Its value in the FMU's `SolverMethod` enumeration (1, 2, 3).
+    pub fn fmi_value(self) -> i32 {
+        Self::ALL
+            .iter()
+            .position(|&m| m == self)
+            .map_or(1, |i| i as i32 + 1)
+    }
+
+    /// The method with this enumeration value.
+    pub fn from_fmi_value(value: f64) -> Option<Self> {
+        if value.fract() != 0.0 || value < 1.0 {
+            return None;
+        }
+        Self::ALL.get(value as usize - 1).copied()
+    }
+
     /// The method with this name.
     pub fn from_name(name: &str) -> Option<Self> {
         Self::ALL.into_iter().find(|m| m.name() == name)
