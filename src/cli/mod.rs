@@ -1,6 +1,7 @@
 //! Command-line front end. Each subcommand is a thin layer over the library.
 
 mod bench;
+mod report;
 
 use std::fs::File;
 use std::io::{BufWriter, Write};
@@ -83,6 +84,11 @@ enum Command {
         #[arg(long, default_value_t = 1.0)]
         seconds: f64,
     },
+    /// Reports on the numerics (`report accuracy`: what accuracy costs in time).
+    Report {
+        #[command(subcommand)]
+        what: report::ReportCommand,
+    },
 }
 
 /// Runs one command; errors come back as messages.
@@ -130,6 +136,7 @@ pub fn run(cli: Cli) -> Result<(), String> {
             Ok(())
         }
         Command::Bench { stages, seconds } => bench::scaling(&stages, seconds),
+        Command::Report { what } => report::run(what),
         Command::Golden { dir } => {
             for name in scene::builtin_names() {
                 let s = scene::builtin(name).expect("built-in");

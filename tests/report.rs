@@ -1,0 +1,166 @@
+//! The accuracy report on prism2: its CSV has the promised columns and finite values, the
+//! errors fall with cost on each method's curve, the correction holds the constraints, and
+//! both figures are real PNGs. Wall times are not asserted.
+
+use std::path::PathBuf;
+
+use tensegrity_fmu::report::{self, Options, COLUMNS};
+use tensegrity_fmu::scene::builtin;
+
+struct Row {
+    method: String,
+    setting: f64,
+    correction: bool,
+    status: String,
+    /// wall time, position, length, orthogonality, energy drift, evaluations.
+    figures: Option<[f64; 6]>,
+}
+
+fn parse(csv: &str) -> (Vec<String>, Vec<Row>) {
+    let mut lines = csv.lines();
+    let header = lines
+        .next()
+        .expect("a header")
+        .split(',')
+        .map(String::from)
+        .collect();
+    let rows = lines
+        .map(|line| {
+            let cells: Vec<&str> = line.split(',').collect();
+            assert_eq!(cells.len(), COLUMNS.len(), "row {line}");
+            let number = |s: &str| -> f64 {
+                let x: f64 = s
+                    .parse()
+                    .unwrap_or_else(|_| panic!("not a number: {s:?} in {line}"));
+                assert!(x.is_finite(), "non-finite value in {line}");
+                x
+            };
+            let figures = match cells[3] {
+                "ok" => {
+                    let v: Vec<f64> = cells[4..].iter().map(|s| number(s)).collect();
+                    Some(v.try_into().expect("six figures"))
+                }
+                "failed" => {
+                    assert!(cells[4..].iter().all(|s| s.is_empty()), "failed row {line}");
+                    None
+                }
+                other => panic!("unknown status {other}"),
+            };
+            Row {
+                method: cells[0].to_string(),
+                setting: number(cells[1]),
+                correction: match cells[2] {
+                    "on" => true,
+                    "off" => false,
+                    other => panic!("correction {other}"),
+                },
+                status: cells[3].to_string(),
+                figures,
+            }
+        })
+        .collect();
+    (header, rows)
+}
+
+fn assert_png(path: &PathBuf) {
+    let bytes = std::fs::read(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    assert!(
+        bytes.starts_with(b"\x89PNG\r\n\x1a\n"),
+        "{} is not a PNG",
+        path.display()
+    );
+    assert!(
+        bytes.len() > 10_000,
+        "{} has only {} bytes",
+        path.display(),
+        bytes.len()
+    );
+}
+
+#[test]
+fn prism2_accuracy_report() {
+    let dir = std::env::temp_dir().join(format!("tensegrity-report-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    let scene = builtin("prism2").unwrap();
+    let r = report::accuracy(&scene, &Options::default(), &dir).expect("the report runs");
+    println!("{}", r.markdown);
+    assert!(r.markdown.contains("Convergence check"));
+    assert!(r.markdown.contains("| target (m) |"));
+    let reference = r.reference.max_difference_m;
+    assert!(
+        reference.is_finite() && reference < 1e-9,
+        "reference check {reference}"
+    );
+
+    let (header, rows) = parse(&std::fs::read_to_string(&r.csv).unwrap());
+    assert_eq!(header, COLUMNS);
+    assert_eq!(rows.len(), r.runs.len(), "a row per run");
+    for method in ["rk4", "rattle", "dopri5"] {
+        for on in [true, false] {
+            let n = rows
+                .iter()
+                .filter(|x| x.method == method && x.correction == on)
+                .count();
+            assert!(n >= 4, "{method} correction {on}: {n} runs");
+        }
+    }
+    for row in rows.iter().filter(|x| x.correction) {
+        assert_eq!(row.status, "ok", "{} {} failed", row.method, row.setting);
+        let [_, _, length, ..] = row.figures.unwrap();
+        assert!(
+            length <= 1e-12,
+            "{} {}: length error {length}",
+            row.method,
+            row.setting
+        );
+    }
+
+    // Each curve, by cost: errors fall while they are well above the reference's own
+    // error; near it, a factor 2 of noise is allowed.
+    for method in ["rk4", "rattle", "dopri5"] {
+        let mut curve: Vec<[f64; 6]> = rows
+            .iter()
+            .filter(|x| x.method == method && x.correction)
+            .map(|x| x.figures.unwrap())
+            .collect();
+        curve.sort_by(|a, b| a[5].total_cmp(&b[5]));
+        let errors: Vec<f64> = curve.iter().map(|f| f[1]).collect();
+        let shown: Vec<String> = errors.iter().map(|e| format!("{e:.2e}")).collect();
+        println!("{method}: errors by cost {shown:?}");
+        for w in curve.windows(2) {
+            let (cheap, dear) = (w[0][1], w[1][1]);
+            if cheap > 100.0 * reference {
+                assert!(
+                    dear <= cheap,
+                    "{method}: error rose from {cheap:e} to {dear:e}"
+                );
+            } else {
+                assert!(
+                    dear <= 2.0 * cheap,
+                    "{method}: error rose from {cheap:e} to {dear:e}"
+                );
+            }
+        }
+        assert!(
+            errors.last() < errors.first(),
+            "{method}: no gain from cost"
+        );
+    }
+
+    // Without the correction, RK4 at its largest step leaves the constraints.
+    let coarsest = rows
+        .iter()
+        .filter(|x| x.method == "rk4" && !x.correction)
+        .max_by(|a, b| a.setting.total_cmp(&b.setting))
+        .unwrap();
+    let [_, _, length, ..] = coarsest.figures.expect("rk4 without correction ran");
+    println!(
+        "rk4 h = {} s without correction: length error {length:e} m",
+        coarsest.setting
+    );
+    assert!(length > 1e-12, "length error {length}");
+
+    assert_png(&r.work_precision);
+    assert_png(&r.constraint_error);
+    let _ = std::fs::remove_dir_all(&dir);
+}
