@@ -172,6 +172,9 @@ fn simulate(
     for w in sim.warnings() {
         eprintln!("warning: {w}");
     }
+    if let Some(w) = sim.stability_problem() {
+        eprintln!("warning: {w}");
+    }
     let path = output.unwrap_or_else(|| PathBuf::from(format!("{}.csv", scene.name)));
     let file = File::create(&path).map_err(|e| format!("cannot create {}: {e}", path.display()))?;
     let mut w = BufWriter::new(file);

@@ -9,7 +9,10 @@ use crate::error::StepError;
 use crate::integrator::{Integrator, Rhs};
 use crate::model::Model;
 
+mod stability;
 mod stepping;
+
+pub use stability::stability_limit;
 
 /// The integrated state.
 #[derive(Debug, Clone, PartialEq)]

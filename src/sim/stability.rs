@@ -1,0 +1,81 @@
+//! An estimate of the fastest mode, for the explicit fixed-step methods' stability limit.
+//!
+//! Power iteration on the position Jacobian of the constrained acceleration (by finite
+//! differences, at rest): its largest eigenvalue magnitude is ω²_max. Velocity-dependent
+//! terms (damping, centrifugal) are left out; cables' slack/taut state is the current one.
+
+use super::Simulation;
+use crate::dynamics;
+use crate::integrator::Method;
+
+/// Largest stable `h ω` on the imaginary axis: RK4 2√2; velocity Verlet 2.
+pub fn stability_limit(method: Method) -> Option<f64> {
+    match method {
+        Method::Rk4 => Some(2.0 * 2f64.sqrt()),
+        Method::Rattle => Some(2.0),
+        Method::Dopri5 => None,
+    }
+}
+
+impl Simulation {
+    /// Estimated highest angular frequency of the structure at the current state, rad/s.
+    pub fn max_frequency(&mut self) -> f64 {
+        let half = self.state.y.len() / 2;
+        if half == 0 {
+            return 0.0;
+        }
+        let q0: Vec<f64> = self.state.y[..half].to_vec();
+        let zero = vec![0.0; half];
+        let mut a0 = vec![0.0; half];
+        dynamics::accelerations(&self.model, &self.inputs, &q0, &zero, &mut self.ws, &mut a0);
+        let scale = self
+            .model
+            .lengths()
+            .into_iter()
+            .fold(0.0, f64::max)
+            .max(1e-3);
+        let eps = 1e-7 * scale;
+        // A fixed, non-symmetric start vector so no mode is missed by symmetry.
+        let mut x: Vec<f64> = (0..half)
+            .map(|i| ((i * 7 + 3) % 11) as f64 - 5.0 + 0.5)
+            .collect();
+        let mut q = vec![0.0; half];
+        let mut a = vec![0.0; half];
+        let mut lambda = 0.0;
+        for _ in 0..60 {
+            let norm = x.iter().map(|v| v * v).sum::<f64>().sqrt();
+            if norm == 0.0 || !norm.is_finite() {
+                break;
+            }
+            for ((qi, q0i), xi) in q.iter_mut().zip(&q0).zip(&x) {
+                *qi = q0i + eps * xi / norm;
+            }
+            dynamics::accelerations(&self.model, &self.inputs, &q, &zero, &mut self.ws, &mut a);
+            for ((xi, ai), a0i) in x.iter_mut().zip(&a).zip(&a0) {
+                *xi = (ai - a0i) / eps;
+            }
+            lambda = x.iter().map(|v| v * v).sum::<f64>().sqrt();
+        }
+        self.refresh();
+        lambda.sqrt()
+    }
+
+    /// `Some(message)` when the fixed step exceeds the method's stability limit for the
+    /// fastest mode, naming the limit and the fixes.
+    pub fn stability_problem(&mut self) -> Option<String> {
+        let method = self.model.solver.method;
+        let limit = stability_limit(method)?;
+        let h = self.model.solver.step_size;
+        let omega = self.max_frequency();
+        (h * omega > limit).then(|| {
+            format!(
+                "solver.step_size = {h} s is above the stability limit of {} for the fastest mode \
+                 (ω ≈ {omega:.3e} rad/s, limit h ≤ {:.3e} s): the run would blow up. Use \
+                 solver.method = dopri5, or solver.step_size ≤ {:.3e} s",
+                method.name(),
+                limit / omega,
+                0.9 * limit / omega
+            )
+        })
+    }
+}
