@@ -25,7 +25,15 @@ pub struct CorrectionPlan {
     lengths: Vec<f64>,
     /// Bars (0-based) whose correction direction vanishes.
     pub skipped: Vec<usize>,
+    /// When a skipped bar can still move (its ψ depends on earlier bars' ψ, but its 3-D
+    /// constraint does not, as in a closed loop of bars), every bar's `ψ_i/|ψ_i|²`, for
+    /// the iterative projection that then follows the exact pass; empty otherwise.
+    loop_patterns: Vec<Vec<(usize, f64)>>,
 }
+
+/// Sweeps of the iterative projection before giving up (it converges linearly from
+/// round-off-sized residuals, in a handful of sweeps).
+const LOOP_SWEEPS: usize = 100;
 
 impl CorrectionPlan {
     /// Orthogonalises the bars' ψ vectors in bar order (modified Gram–Schmidt, sparse).
@@ -89,10 +97,27 @@ impl CorrectionPlan {
             phi_norm2.push(norm2);
             phis.push(phi);
         }
+        let moving_skipped = skipped.iter().any(|&bar| !coords.static_bar[bar]);
+        let loop_patterns = if moving_skipped {
+            (0..n_bars)
+                .map(|bar| {
+                    let psi = coords.psi(bar);
+                    let n2: f64 = psi.iter().map(|(_, v)| v * v).sum();
+                    if n2 == 0.0 {
+                        Vec::new()
+                    } else {
+                        psi.iter().map(|&(g, v)| (g, v / n2)).collect()
+                    }
+                })
+                .collect()
+        } else {
+            Vec::new()
+        };
         Self {
             directions,
             lengths: lengths.to_vec(),
             skipped,
+            loop_patterns,
         }
     }
 
@@ -106,13 +131,62 @@ impl CorrectionPlan {
             let delta = b * (self.lengths[bar] / b.norm()) - b;
             apply(dir, &delta, q);
         }
+        self.loop_positions(coords, q);
+    }
+
+    /// Nonlinear Gauss–Seidel (SHAKE) over all bars, each moved along itself with the
+    /// minimum-norm pattern `ψ_i/|ψ_i|²`, until every length holds to round-off. Only
+    /// runs when a moving bar was skipped by the exact pass.
+    fn loop_positions(&self, coords: &Coordinates, q: &mut [f64]) {
+        for _ in 0..LOOP_SWEEPS {
+            let mut worst = 0.0f64;
+            for (bar, pattern) in self.loop_patterns.iter().enumerate() {
+                if pattern.is_empty() {
+                    continue;
+                }
+                let b = bar_vector(coords, bar, q, true);
+                let l = self.lengths[bar];
+                worst = worst.max((b.norm() - l).abs() / l);
+                apply(pattern, &(b * (l / b.norm()) - b), q);
+            }
+            if worst <= 4.0 * f64::EPSILON {
+                return;
+            }
+        }
+    }
+
+    /// The velocity counterpart of [`Self::loop_positions`] (a linear Gauss–Seidel).
+    fn loop_velocities(&self, coords: &Coordinates, q: &[f64], v: &mut [f64]) {
+        for _ in 0..LOOP_SWEEPS {
+            let mut worst = 0.0f64;
+            for (bar, pattern) in self.loop_patterns.iter().enumerate() {
+                if pattern.is_empty() {
+                    continue;
+                }
+                let b = bar_vector(coords, bar, q, true);
+                let bdot = bar_vector(coords, bar, v, false);
+                let dot = b.dot(&bdot);
+                worst = worst.max(dot.abs() / (b.norm() * bdot.norm()).max(f64::MIN_POSITIVE));
+                apply(pattern, &(-b * (dot / b.norm_squared())), v);
+            }
+            if worst <= 4.0 * f64::EPSILON {
+                return;
+            }
+        }
     }
 
     /// Restores `|b_i| = l_i` like [`Self::correct_positions`], but moving each bar along
     /// its direction at the start of the step, `b_i(q_old)` (SHAKE): with that choice a
     /// kick–drift–kick step is RATTLE, whose energy error stays bounded. Falls back to the
     /// radial move when the step was too large for a root to exist.
-    pub fn correct_positions_shake(&self, coords: &Coordinates, q: &mut [f64], q_old: &[f64]) {
+    /// The displacement is also added to `moved`, exactly as applied, for the velocity.
+    pub fn correct_positions_shake(
+        &self,
+        coords: &Coordinates,
+        q: &mut [f64],
+        q_old: &[f64],
+        moved: &mut [f64],
+    ) {
         for (bar, dir) in self.directions.iter().enumerate() {
             if dir.is_empty() {
                 continue;
@@ -134,6 +208,7 @@ impl CorrectionPlan {
                 b * (l / b.norm()) - b
             };
             apply(dir, &delta, q);
+            apply(dir, &delta, moved);
         }
     }
 
@@ -148,6 +223,7 @@ impl CorrectionPlan {
             let delta = -b * (b.dot(&bdot) / b.norm_squared());
             apply(dir, &delta, v);
         }
+        self.loop_velocities(coords, q, v);
     }
 
     /// Number of nonzeros over all directions (the correction's cost per pass).

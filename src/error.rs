@@ -60,6 +60,24 @@ pub enum StepError {
         /// The step that was too small.
         step: f64,
     },
+    /// Without the correction, a bar's length drifted too far for the model to mean anything.
+    #[error("with solver.correction off, bar {bar} drifted {error:e} m from its length {length} m (over 1%) by t = {time} s; the state was kept at the last good point. Turn solver.correction on, or reduce the step size")]
+    ConstraintDrift {
+        /// Time at the start of the failed step.
+        time: f64,
+        /// 1-based bar number.
+        bar: usize,
+        /// Its length error, m.
+        error: f64,
+        /// Its nominal length, m.
+        length: f64,
+    },
+    /// The fixed step is above the explicit method's stability limit.
+    #[error("{message}")]
+    Unstable {
+        /// Names the limit and the fixes.
+        message: String,
+    },
     /// An input holds a NaN or an infinity.
     #[error("input {name} is not finite ({value})")]
     NonFiniteInput {

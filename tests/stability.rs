@@ -16,9 +16,11 @@ fn stiff_prism(stiffness: f64, method: Method, step: f64) -> Scene {
     scene
 }
 
-/// Runs 1 s under a 1 N load; returns the outcome and the final energy.
+/// Runs 1 s under a 1 N load, without the stability guard; returns the outcome and the
+/// final energy.
 fn run(scene: &Scene) -> (Result<u64, StepError>, f64) {
     let mut sim = Simulation::new(Model::new(scene).unwrap());
+    sim.guard_stability = false;
     sim.inputs.node_force[0].x = 1.0;
     let result = sim.advance_to(1.0);
     sim.refresh();
@@ -54,6 +56,11 @@ fn unstable_fixed_step_is_named_with_its_fixes() {
         why.contains("solver.step_size") && why.contains("dopri5"),
         "{why}"
     );
+    // The guard refuses before any step is taken, so no broken state is ever accepted.
+    let before = sim.state().clone();
+    let refused = sim.advance_to(1e-3).unwrap_err();
+    assert!(matches!(refused, StepError::Unstable { .. }), "{refused:?}");
+    assert_eq!(sim.state(), &before);
     let mut ok = Simulation::new(Model::new(&stiff_prism(1e7, Method::Dopri5, 1e-3)).unwrap());
     assert!(
         ok.stability_problem().is_none(),

@@ -44,10 +44,6 @@ pub(super) struct Core {
     pub(super) rebuild: bool,
     pub(super) stale: bool,
     pub(super) warned_negative: Vec<bool>,
-    /// Why the fixed step would blow up, from the last stability check.
-    pub(super) unstable: Option<String>,
-    /// Largest commanded force density when stability was last checked, N/m.
-    pub(super) checked_density: f64,
 }
 
 /// One FMU instance.
@@ -103,8 +99,6 @@ impl Instance {
             stop_time: None,
             rebuild: false,
             stale: false,
-            unstable: None,
-            checked_density: 0.0,
         };
         let mut instance = Self {
             name: name.to_string(),
@@ -220,13 +214,13 @@ impl Instance {
         self.require("fmi2ExitInitializationMode", &[Mode::InitializationMode])?;
         self.rebuild_if_needed("fmi2ExitInitializationMode")?;
         self.core.mode = Mode::StepComplete;
-        self.check_stability();
-        if let Some(why) = self.core.unstable.clone() {
+        if let Some(why) = self.core.sim.check_stability().map(str::to_string) {
             self.log(
                 Category::Warning,
                 format!("fmi2ExitInitializationMode: {why}"),
             );
         }
+        self.core.stale = true;
         let model = self.core.sim.model();
         let summary = format!(
             "fmi2ExitInitializationMode: {} bars, {} cables, {} reduced coordinates, internal step {} s, correction {}",
@@ -255,13 +249,6 @@ impl Instance {
             "fmi2Reset: back to the state after fmi2Instantiate",
         );
         Ok(Status::Ok)
-    }
-
-    /// Estimates the fastest mode and records whether the fixed step can follow it.
-    fn check_stability(&mut self) {
-        self.core.checked_density = max_density(&self.core.sim);
-        self.core.unstable = self.core.sim.stability_problem();
-        self.core.stale = true;
     }
 
     fn rebuild_if_needed(&mut self, call: &str) -> FmiResult<()> {
@@ -435,13 +422,6 @@ impl Instance {
                 )));
             }
         }
-        // Commanded densities add stiffness: re-check when they have grown a lot.
-        if max_density(&self.core.sim) > 2.0 * self.core.checked_density {
-            self.check_stability();
-        }
-        if let Some(why) = &self.core.unstable {
-            return Err(error(format!("fmi2DoStep: {why}")));
-        }
         let steps = self
             .core
             .sim
@@ -563,10 +543,6 @@ impl Core {
         self.rebuild = next.rebuild;
         self.stale = true;
     }
-}
-
-fn max_density(sim: &Simulation) -> f64 {
-    sim.inputs.force_density.iter().fold(0.0, |m, &g| m.max(g))
 }
 
 pub(super) fn apply_parameter(scene: &mut Scene, binding: Binding, value: f64) {

@@ -88,8 +88,6 @@ impl Snapshot {
         core.warned_negative = self.warned_negative.clone();
         core.rebuild = self.rebuild;
         core.stale = false;
-        // Parameters may differ: the next DoStep re-checks stability.
-        core.checked_density = -1.0;
         Ok(())
     }
 

@@ -17,8 +17,9 @@ pub trait Rhs {
     /// Writes `f(t, y)` into `dy`.
     fn eval(&mut self, t: f64, y: &[f64], dy: &mut [f64]);
     /// Projects the positions of `y` onto the constraints along the constraint directions
-    /// of `before` (the start of the step); a no-op when the correction is off.
-    fn project_positions(&mut self, _y: &mut [f64], _before: &[f64]) {}
+    /// of `before` (the start of the step), adding the displacement to `moved`; a no-op
+    /// when the correction is off.
+    fn project_positions(&mut self, _y: &mut [f64], _before: &[f64], _moved: &mut [f64]) {}
 }
 
 /// What an attempted step did.

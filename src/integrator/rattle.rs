@@ -47,11 +47,17 @@ impl Integrator for Rattle {
         for (vi, ai) in v.iter_mut().zip(a) {
             *vi += 0.5 * h * ai;
         }
-        // Drift, then project onto the bar lengths.
+        // Drift, then project onto the bar lengths; the projection's displacement belongs
+        // to the half-step velocity too (RATTLE's position multiplier acts on v½).
         for (qi, vi) in q.iter_mut().zip(v.iter()) {
             *qi += h * vi;
         }
-        rhs.project_positions(y, &self.stage);
+        let moved = &mut self.f_new[..half];
+        moved.fill(0.0);
+        rhs.project_positions(y, &self.stage, moved);
+        for (vi, di) in y[half..].iter_mut().zip(moved.iter()) {
+            *vi += di / h;
+        }
         // Acceleration at the new positions and the predicted new velocity.
         self.stage.copy_from_slice(y);
         for (si, ai) in self.stage[half..].iter_mut().zip(&self.f[half..]) {

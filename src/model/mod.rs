@@ -120,9 +120,15 @@ impl Model {
         let correction =
             CorrectionPlan::new(&coords, &bars.iter().map(|b| b.length).collect::<Vec<_>>());
         for &bar in &correction.skipped {
+            let why = if coords.static_bar[bar] {
+                "both ends are pinned, so it never moves"
+            } else {
+                "it closes a loop of bars or joins nodes that earlier bars already move together; \
+                 its length and orthogonality are then restored by an iterative projection after \
+                 the exact pass"
+            };
             warnings.push(format!(
-                "bar {}: its correction direction vanishes (pins or earlier bars already fix it); \
-                 the correction skips it",
+                "bar {}: its correction direction vanishes and the exact correction skips it: {why}",
                 bar + 1
             ));
         }

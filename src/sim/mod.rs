@@ -23,6 +23,15 @@ pub struct State {
     pub y: Vec<f64>,
 }
 
+/// The last stability check of a fixed-step method.
+#[derive(Debug, Clone, Default, PartialEq)]
+struct Stability {
+    /// Largest commanded force density at the check (it adds stiffness), N/m.
+    checked_density: Option<f64>,
+    /// Why the step would blow up, if it would.
+    problem: Option<String>,
+}
+
 /// Counters of the work done so far.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub struct Stats {
@@ -40,6 +49,8 @@ pub struct Simulation {
     state: State,
     last_good: Vec<f64>,
     advance_start: State,
+    /// The inputs of the last step: carried integrator values are stale once they change.
+    stepped_inputs: Inputs,
     /// Next trial step of an adaptive method, s.
     h_next: f64,
     stats: Stats,
@@ -48,6 +59,9 @@ pub struct Simulation {
     integrator: Box<dyn Integrator>,
     /// Apply the paper's correction after each step.
     pub correction: bool,
+    /// Refuse fixed steps above the explicit method's stability limit (on by default).
+    pub guard_stability: bool,
+    stability: Stability,
     warnings: Vec<String>,
 }
 
@@ -59,12 +73,15 @@ impl Clone for Simulation {
             state: self.state.clone(),
             last_good: self.last_good.clone(),
             advance_start: self.advance_start.clone(),
+            stepped_inputs: self.stepped_inputs.clone(),
             h_next: self.h_next,
             stats: self.stats,
             ws: self.ws.clone(),
             acc: self.acc.clone(),
             integrator: self.integrator.boxed_clone(),
             correction: self.correction,
+            guard_stability: self.guard_stability,
+            stability: self.stability.clone(),
             warnings: self.warnings.clone(),
         }
     }
@@ -87,12 +104,12 @@ impl Rhs for System<'_> {
         dynamics::accelerations(self.model, self.inputs, q, v, self.ws, dv);
     }
 
-    fn project_positions(&mut self, y: &mut [f64], before: &[f64]) {
+    fn project_positions(&mut self, y: &mut [f64], before: &[f64], moved: &mut [f64]) {
         if self.correction {
             let half = y.len() / 2;
             let coords = &self.model.coords;
             let plan = &self.model.correction;
-            plan.correct_positions_shake(coords, &mut y[..half], &before[..half]);
+            plan.correct_positions_shake(coords, &mut y[..half], &before[..half], moved);
         }
     }
 }
@@ -113,7 +130,10 @@ impl Simulation {
         let n = y.len();
         let mut sim = Self {
             inputs: Inputs::start(&model),
+            stepped_inputs: Inputs::start(&model),
             correction: model.solver.correction,
+            guard_stability: true,
+            stability: Stability::default(),
             advance_start: State {
                 time: 0.0,
                 y: y.clone(),

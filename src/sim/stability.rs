@@ -60,6 +60,29 @@ impl Simulation {
         lambda.sqrt()
     }
 
+    /// The cached stability verdict, re-checked when the commanded force densities (which
+    /// add stiffness) have more than doubled since the last check, or fell after an
+    /// unstable verdict.
+    pub fn check_stability(&mut self) -> Option<&str> {
+        let density = self
+            .inputs
+            .force_density
+            .iter()
+            .fold(0.0, |m: f64, &g| m.max(g));
+        // A stable verdict holds until the densities double; an unstable one is re-examined
+        // as soon as they fall (e.g. after a state with the old inputs is restored).
+        let unstable = self.stability.problem.is_some();
+        let stale = self
+            .stability
+            .checked_density
+            .is_none_or(|checked| density > 2.0 * checked || (unstable && density < checked));
+        if stale {
+            self.stability.problem = self.stability_problem();
+            self.stability.checked_density = Some(density);
+        }
+        self.stability.problem.as_deref()
+    }
+
     /// `Some(message)` when the fixed step exceeds the method's stability limit for the
     /// fastest mode, naming the limit and the fixes.
     pub fn stability_problem(&mut self) -> Option<String> {

@@ -3,6 +3,7 @@
 //! advance leaves the state where it began.
 
 use super::{Simulation, System};
+use crate::correction::bar_vector;
 use crate::error::StepError;
 use crate::integrator::Outcome;
 
@@ -34,6 +35,8 @@ impl Simulation {
             return self.advance_to(t_next).map(|_| ());
         }
         self.check_inputs()?;
+        self.check_step_stability()?;
+        self.note_input_changes();
         self.last_good.copy_from_slice(&self.state.y);
         self.attempt(t, h)?;
         self.state.time = t_next;
@@ -46,6 +49,8 @@ impl Simulation {
     /// Returns the number of accepted steps; on failure the state is left as it was.
     pub fn advance_to(&mut self, t_end: f64) -> Result<u64, StepError> {
         self.check_inputs()?;
+        self.check_step_stability()?;
+        self.note_input_changes();
         self.advance_start.time = self.state.time;
         self.advance_start.y.copy_from_slice(&self.state.y);
         let result = if self.integrator.adaptive() {
@@ -149,8 +154,61 @@ impl Simulation {
                 what: format!("reduced {what} component {}", i % half + 1),
             });
         }
+        if !self.correction {
+            if let Err(e) = self.check_drift(t) {
+                self.state.y.copy_from_slice(&self.last_good);
+                self.integrator.invalidate();
+                self.refresh();
+                return Err(e);
+            }
+        }
         self.stats.steps += 1;
         Ok(outcome)
+    }
+
+    /// Without the correction nothing holds the bars; past 1% of a length the run is
+    /// meaningless, so it stops rather than return it.
+    fn check_drift(&self, t: f64) -> Result<(), StepError> {
+        let half = self.state.y.len() / 2;
+        let q = &self.state.y[..half];
+        for (i, bar) in self.model.bars.iter().enumerate() {
+            let error = (bar_vector(&self.model.coords, i, q, true).norm() - bar.length).abs();
+            if error > 0.01 * bar.length {
+                return Err(StepError::ConstraintDrift {
+                    time: t,
+                    bar: i + 1,
+                    error,
+                    length: bar.length,
+                });
+            }
+        }
+        Ok(())
+    }
+
+    fn check_step_stability(&mut self) -> Result<(), StepError> {
+        if !self.guard_stability || self.integrator.adaptive() {
+            return Ok(());
+        }
+        match self.check_stability() {
+            Some(message) => Err(StepError::Unstable {
+                message: message.to_string(),
+            }),
+            None => Ok(()),
+        }
+    }
+
+    /// Values an integrator carries between steps (RATTLE's acceleration, Dormand–Prince's
+    /// last stage) were computed with the old inputs: drop them when the inputs changed.
+    fn note_input_changes(&mut self) {
+        let old = &mut self.stepped_inputs;
+        if old.force_density != self.inputs.force_density
+            || old.node_force != self.inputs.node_force
+        {
+            old.force_density
+                .copy_from_slice(&self.inputs.force_density);
+            old.node_force.copy_from_slice(&self.inputs.node_force);
+            self.integrator.invalidate();
+        }
     }
 
     fn correct(&mut self) {
