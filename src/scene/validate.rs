@@ -45,7 +45,11 @@ pub(super) fn validate(scene: &Scene) -> Result<(), SceneError> {
         if length(a, b) <= ZERO_LENGTH_FRACTION * scale {
             return Err(SceneError::invalid(
                 format!("{key}.nodes"),
-                format!("zero-length bar: nodes {} and {} coincide", a + 1, b + 1),
+                format!(
+                    "zero-length bar: nodes {} and {} coincide (closer than 1e-9 of the structure's size)",
+                    a + 1,
+                    b + 1
+                ),
             ));
         }
         finite(&format!("{key}.mass"), bar.mass)?;
@@ -65,7 +69,11 @@ pub(super) fn validate(scene: &Scene) -> Result<(), SceneError> {
         if length(a, b) <= ZERO_LENGTH_FRACTION * scale {
             return Err(SceneError::invalid(
                 format!("{key}.nodes"),
-                format!("zero-length cable: nodes {} and {} coincide", a + 1, b + 1),
+                format!(
+                    "zero-length cable: nodes {} and {} coincide (closer than 1e-9 of the structure's size)",
+                    a + 1,
+                    b + 1
+                ),
             ));
         }
         validate_cable_law(scene, &key, j)?;
