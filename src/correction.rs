@@ -149,7 +149,7 @@ impl CorrectionPlan {
                 worst = worst.max((b.norm() - l).abs() / l);
                 apply(pattern, &(b * (l / b.norm()) - b), q);
             }
-            if worst <= 4.0 * f64::EPSILON {
+            if worst <= 16.0 * f64::EPSILON {
                 return;
             }
         }
@@ -169,7 +169,7 @@ impl CorrectionPlan {
                 worst = worst.max(dot.abs() / (b.norm() * bdot.norm()).max(f64::MIN_POSITIVE));
                 apply(pattern, &(-b * (dot / b.norm_squared())), v);
             }
-            if worst <= 4.0 * f64::EPSILON {
+            if worst <= 16.0 * f64::EPSILON {
                 return;
             }
         }
