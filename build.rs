@@ -1,5 +1,6 @@
-//! Hashes the sources that make up the FMU binary into `BUILD_ID`, so that an FMU's GUID
-//! changes whenever the binary's code does.
+//! Hashes what makes up the FMU binary (its sources, the locked dependency versions and
+//! the compiler version) into `BUILD_ID`, so that an FMU's GUID changes whenever the
+//! binary does.
 
 use std::path::Path;
 
@@ -28,6 +29,12 @@ fn main() {
     for dir in ["src", "fmu/src", "modelDescription/src"] {
         hash_dir(&root.join(dir), &mut hasher);
         println!("cargo:rerun-if-changed={dir}");
+    }
+    hasher.update(std::fs::read(root.join("Cargo.lock")).unwrap_or_default());
+    println!("cargo:rerun-if-changed=Cargo.lock");
+    let rustc = std::env::var("RUSTC").unwrap_or_else(|_| "rustc".into());
+    if let Ok(out) = std::process::Command::new(rustc).arg("--version").output() {
+        hasher.update(out.stdout);
     }
     let digest = hasher.finalize();
     let hex: String = digest.iter().take(16).map(|b| format!("{b:02x}")).collect();

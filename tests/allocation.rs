@@ -23,8 +23,32 @@ unsafe impl GlobalAlloc for Counting {
 #[global_allocator]
 static GLOBAL: Counting = Counting;
 
+/// One test, so that no other test allocates on another thread while counting.
 #[test]
 fn stepping_allocates_nothing() {
+    fixed_steps_allocate_nothing();
+    every_method_advances_without_allocating();
+}
+
+fn every_method_advances_without_allocating() {
+    use tensegrity_fmu::integrator::Method;
+    for method in Method::ALL {
+        let mut scene = builtin("tower20").unwrap();
+        scene.solver.method = method;
+        let mut sim = Simulation::new(Model::new(&scene).unwrap());
+        sim.inputs.node_force[0].x = 1.0;
+        sim.advance_to(0.002).unwrap();
+        let before = ALLOCATIONS.load(Ordering::SeqCst);
+        // The path fmi2DoStep takes, communication step by communication step.
+        for k in 3..=100 {
+            sim.advance_to(k as f64 * 1e-3).unwrap();
+        }
+        let during = ALLOCATIONS.load(Ordering::SeqCst) - before;
+        assert_eq!(during, 0, "{}: {during} allocations", method.name());
+    }
+}
+
+fn fixed_steps_allocate_nothing() {
     for name in ["prism2", "icosahedron", "tower20"] {
         let mut sim = Simulation::new(Model::new(&builtin(name).unwrap()).unwrap());
         sim.inputs.node_force[0].x = 1.0;

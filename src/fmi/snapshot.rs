@@ -14,7 +14,7 @@ use crate::sim::{Simulation, State};
 use fmi2_model_description::Causality;
 
 const MAGIC: &[u8; 8] = b"TNSGSTAT";
-const VERSION: u32 = 1;
+const VERSION: u32 = 2;
 /// A SHA-256 of everything before it closes the buffer, so corruption is caught.
 const DIGEST_LEN: usize = 32;
 
@@ -32,6 +32,10 @@ pub struct Snapshot {
     rebuild: bool,
     /// Values of the parameter variables, in table order.
     parameters: Vec<f64>,
+    /// The adaptive method's next trial step, s.
+    h_next: f64,
+    /// Values the integrator carries to the next step.
+    carried: Vec<f64>,
 }
 
 impl Snapshot {
@@ -47,6 +51,8 @@ impl Snapshot {
             warned_negative: core.warned_negative.clone(),
             rebuild: core.rebuild,
             parameters: parameter_bindings(core).map(|b| core.read(b)).collect(),
+            h_next: core.sim.carried().0,
+            carried: core.sim.carried().1,
         }
     }
 
@@ -80,6 +86,7 @@ impl Snapshot {
         sim.inputs.force_density = self.force_density.clone();
         sim.inputs.node_force = self.node_force.clone();
         sim.set_state(self.state.clone());
+        sim.restore_carried(self.h_next, &self.carried);
         core.sim = sim;
         core.scene = scene;
         core.mode = self.mode;
@@ -120,6 +127,9 @@ impl Snapshot {
         out.push(u8::from(self.rebuild));
         put_len(&mut out, self.parameters.len());
         put_f64s(&mut out, &self.parameters);
+        put_f64s(&mut out, &[self.h_next]);
+        put_len(&mut out, self.carried.len());
+        put_f64s(&mut out, &self.carried);
         let digest = Sha256::digest(&out);
         out.extend_from_slice(&digest);
         out
@@ -166,6 +176,9 @@ impl Snapshot {
         let rebuild = r.u8()? != 0;
         let n = r.len()?;
         let parameters = r.f64s(n)?;
+        let h_next = r.f64()?;
+        let n = r.len()?;
+        let carried = r.f64s(n)?;
         if r.at != bytes.len() {
             return Err("trailing bytes after the serialized state".into());
         }
@@ -177,6 +190,8 @@ impl Snapshot {
             .chain(&y)
             .chain(&force_density)
             .chain(&parameters)
+            .chain(&carried)
+            .chain([h_next].iter())
             .all(|x| x.is_finite())
             && node_force.iter().all(|f| f.iter().all(|x| x.is_finite()));
         if !finite {
@@ -196,6 +211,8 @@ impl Snapshot {
             warned_negative,
             rebuild,
             parameters,
+            h_next,
+            carried,
         })
     }
 }

@@ -132,4 +132,19 @@ impl Integrator for Dopri5 {
     fn boxed_clone(&self) -> Box<dyn Integrator> {
         Box::new(self.clone())
     }
+
+    fn carried(&self) -> Vec<f64> {
+        if self.fresh_k1 {
+            self.k[0].clone()
+        } else {
+            Vec::new()
+        }
+    }
+
+    fn restore_carried(&mut self, values: &[f64]) {
+        self.fresh_k1 = values.len() == self.k[0].len();
+        if self.fresh_k1 {
+            self.k[0].copy_from_slice(values);
+        }
+    }
 }

@@ -56,6 +56,14 @@ pub trait Integrator: Send {
     fn rhs_evaluations(&self) -> u64;
     /// A boxed copy (for FMU state snapshots).
     fn boxed_clone(&self) -> Box<dyn Integrator>;
+    /// Values carried to the next step (empty if none are valid), for FMU state
+    /// snapshots: restoring them makes a resumed run bit-identical.
+    fn carried(&self) -> Vec<f64> {
+        Vec::new()
+    }
+    /// Restores what [`Integrator::carried`] returned; a wrong length is ignored (the
+    /// values are then recomputed).
+    fn restore_carried(&mut self, _values: &[f64]) {}
 }
 
 /// The integration methods a scene, the CLI or an FMU parameter can choose.

@@ -97,4 +97,19 @@ impl Integrator for Rattle {
     fn boxed_clone(&self) -> Box<dyn Integrator> {
         Box::new(self.clone())
     }
+
+    fn carried(&self) -> Vec<f64> {
+        if self.fresh {
+            self.f.clone()
+        } else {
+            Vec::new()
+        }
+    }
+
+    fn restore_carried(&mut self, values: &[f64]) {
+        self.fresh = values.len() == self.f.len();
+        if self.fresh {
+            self.f.copy_from_slice(values);
+        }
+    }
 }

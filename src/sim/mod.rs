@@ -175,6 +175,30 @@ impl Simulation {
         self.refresh();
     }
 
+    /// What the integrator carries between steps, and the adaptive method's next trial
+    /// step: with the state, everything a bit-identical resumption needs.
+    pub fn carried(&self) -> (f64, Vec<f64>) {
+        let same_inputs = self.stepped_inputs == self.inputs;
+        let values = if same_inputs {
+            self.integrator.carried()
+        } else {
+            Vec::new()
+        };
+        (self.h_next, values)
+    }
+
+    /// Restores what [`Simulation::carried`] returned (after [`Simulation::set_state`]).
+    pub fn restore_carried(&mut self, h_next: f64, values: &[f64]) {
+        self.h_next = h_next;
+        self.integrator.restore_carried(values);
+        self.stepped_inputs
+            .force_density
+            .copy_from_slice(&self.inputs.force_density);
+        self.stepped_inputs
+            .node_force
+            .copy_from_slice(&self.inputs.node_force);
+    }
+
     /// Steps taken and rejected so far.
     pub fn stats(&self) -> Stats {
         self.stats
