@@ -128,6 +128,7 @@ fn random_scene(seed: u64) -> Scene {
         gravity: Some([0.0, 0.0, -9.81]),
         force_inputs: vec![10, 8],
         velocities: Some(velocities),
+        loads: Vec::new(),
         prestress: None,
         solver: SolverSpec::default(),
     }
@@ -344,7 +345,7 @@ fn check_energy_gradient(scene: Scene, seed: u64) {
     };
     let mut ws = Workspace::new(model);
     kinematics(model, q, &vec![0.0; half], &mut ws);
-    applied_forces(model, &inputs, &mut ws);
+    applied_forces(model, &inputs, 0.0, &mut ws);
     // The finite differences must not straddle a slack/taut kink.
     let (mut taut, mut elastic) = (0, 0);
     for cable in &model.cables {

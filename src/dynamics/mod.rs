@@ -81,17 +81,18 @@ impl Workspace {
     }
 }
 
-/// Computes `η̈₂` (flat, length 3r) for reduced positions `q` and velocities `v`.
+/// Computes `η̈₂` (flat, length 3r) at time `t` for reduced positions `q` and velocities `v`.
 pub fn accelerations(
     model: &Model,
     inputs: &Inputs,
+    t: f64,
     q: &[f64],
     v: &[f64],
     ws: &mut Workspace,
     acc: &mut [f64],
 ) {
     kinematics(model, q, v, ws);
-    applied_forces(model, inputs, ws);
+    applied_forces(model, inputs, t, ws);
     bar_response(model, ws);
     if ws.reactions.size() > 0 {
         add_reactions(model, ws);
@@ -144,9 +145,9 @@ pub fn cable_force_density(
     }
 }
 
-/// Stage 2: cable, input and gravity forces on the bar ends (forces on a bar-less pinned
-/// node are taken by its pin).
-pub fn applied_forces(model: &Model, inputs: &Inputs, ws: &mut Workspace) {
+/// Stage 2: cable, input, scripted-load and gravity forces on the bar ends at time `t`
+/// (forces on a bar-less pinned node are taken by its pin).
+pub fn applied_forces(model: &Model, inputs: &Inputs, t: f64, ws: &mut Workspace) {
     ws.end_force.iter_mut().for_each(|f| *f = Vector3::zeros());
     let node_end = &model.coords.node_end;
     for (j, cable) in model.cables.iter().enumerate() {
@@ -165,6 +166,11 @@ pub fn applied_forces(model: &Model, inputs: &Inputs, ws: &mut Workspace) {
     for (k, &n) in model.force_inputs.iter().enumerate() {
         if let Some(e) = node_end[n] {
             ws.end_force[e] += inputs.node_force[k];
+        }
+    }
+    for (n, load) in &model.loads {
+        if let Some(e) = node_end[*n] {
+            ws.end_force[e] += Vector3::from(load.force_at(t));
         }
     }
     if let Some(g) = model.gravity {

@@ -23,12 +23,13 @@ pub fn index_html(model: &Model, table: &VariableTable) -> String {
     }
     let pinned: Vec<String> = scene.fixed.iter().map(|n| n.to_string()).collect();
     h.push_str(&format!(
-        "<h2>Structure</h2>\n<ul><li>{} nodes (numbered from 1), pinned: {}</li><li>{} rigid bars</li><li>{} cables ({} force-density controlled)</li><li>gravity: {}</li><li>internal step {} s, correction {}</li></ul>\n",
+        "<h2>Structure</h2>\n<ul><li>{} nodes (numbered from 1), pinned: {}</li><li>{} rigid bars</li><li>{} cables ({} force-density controlled)</li><li>scripted loads: {}</li><li>gravity: {}</li><li>internal step {} s, correction {}</li></ul>\n",
         model.n_nodes(),
         if pinned.is_empty() { "none".to_string() } else { pinned.join(", ") },
         model.bars.len(),
         model.cables.len(),
         model.controlled.len(),
+        model.loads.len(),
         model.gravity.map_or("none".to_string(), |g| format!("[{}, {}, {}] m/s²", g.x, g.y, g.z)),
         model.solver.step_size,
         if model.solver.correction { "on" } else { "off" },

@@ -9,7 +9,7 @@ use nalgebra::Vector3;
 use crate::correction::CorrectionPlan;
 use crate::dynamics::reactions::Reactions;
 use crate::error::SceneError;
-use crate::scene::{CableControl, Scene, SolverSpec};
+use crate::scene::{CableControl, LoadSpec, Scene, SolverSpec};
 pub use coords::BasisKind;
 use coords::Coordinates;
 
@@ -69,6 +69,8 @@ pub struct Model {
     pub gravity: Option<Vector3<f64>>,
     /// Nodes (0-based) that take force inputs, in scene order.
     pub force_inputs: Vec<usize>,
+    /// Scripted loads: node (0-based) and law; empty when the scene has none.
+    pub loads: Vec<(usize, LoadSpec)>,
     /// Cable index of each controlled-cable input.
     pub controlled: Vec<usize>,
     /// Start force density of each controlled-cable input, N/m.
@@ -155,6 +157,11 @@ impl Model {
             cables,
             gravity: scene.gravity.map(Vector3::from),
             force_inputs: scene.force_inputs.iter().map(|&n| n - 1).collect(),
+            loads: scene
+                .loads
+                .iter()
+                .map(|l| (l.node() - 1, l.clone()))
+                .collect(),
             controlled,
             controlled_start,
             solver: scene.solver.clone(),

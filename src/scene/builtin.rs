@@ -103,6 +103,7 @@ pub fn tower_scene(stages: usize, stiffness: Option<f64>, name: &str) -> Scene {
         gravity: None,
         force_inputs: (0..3).map(|i| id(stages, i)).collect(),
         velocities: None,
+        loads: Vec::new(),
         prestress: Some(PrestressSpec {
             min_tension: PRESTRESS_TENSION,
         }),
@@ -175,6 +176,7 @@ fn icosahedron() -> Scene {
         cables,
         gravity: None,
         velocities: None,
+        loads: Vec::new(),
         prestress: Some(PrestressSpec {
             min_tension: PRESTRESS_TENSION,
         }),

@@ -42,6 +42,9 @@ pub struct Scene {
     /// Initial node velocities `[vx, vy, vz]` in m/s, one per node.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub velocities: Option<Vec<[f64; 3]>>,
+    /// Scripted loads on nodes, evaluated at the integrator's stage times.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub loads: Vec<LoadSpec>,
     /// Equilibrium prestress: derive rest lengths / start force densities from a self-stress.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub prestress: Option<PrestressSpec>,
@@ -89,6 +92,74 @@ pub struct CableSpec {
     /// Start force density in N/m (controlled cables; omit when `prestress` derives it).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub force_density: Option<f64>,
+}
+
+/// A scripted load on one node (N), a function of time only.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
+pub enum LoadSpec {
+    /// `F(t) = force`.
+    Constant {
+        /// Node number (1-based).
+        node: usize,
+        /// Force in N.
+        force: [f64; 3],
+    },
+    /// `F(t) = amplitude · sin(2π frequency t + phase)`.
+    Sinusoidal {
+        /// Node number (1-based).
+        node: usize,
+        /// Amplitude in N.
+        amplitude: [f64; 3],
+        /// Frequency in Hz.
+        frequency: f64,
+        /// Phase in rad.
+        #[serde(default)]
+        phase: f64,
+    },
+    /// `F(t) = force` from `time` on, 0 before.
+    Step {
+        /// Node number (1-based).
+        node: usize,
+        /// Force in N.
+        force: [f64; 3],
+        /// Switch-on time in s.
+        time: f64,
+    },
+}
+
+impl LoadSpec {
+    /// Its node number (1-based).
+    pub fn node(&self) -> usize {
+        match *self {
+            Self::Constant { node, .. }
+            | Self::Sinusoidal { node, .. }
+            | Self::Step { node, .. } => node,
+        }
+    }
+
+    /// The force at time `t`, N.
+    pub fn force_at(&self, t: f64) -> [f64; 3] {
+        match *self {
+            Self::Constant { force, .. } => force,
+            Self::Sinusoidal {
+                amplitude,
+                frequency,
+                phase,
+                ..
+            } => {
+                let s = (2.0 * std::f64::consts::PI * frequency * t + phase).sin();
+                amplitude.map(|a| a * s)
+            }
+            Self::Step { force, time, .. } => {
+                if t >= time {
+                    force
+                } else {
+                    [0.0; 3]
+                }
+            }
+        }
+    }
 }
 
 /// Request for an equilibrium self-stress of the start geometry.

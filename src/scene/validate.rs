@@ -1,6 +1,6 @@
 //! Scene validation: every rejection names the key (1-based indices) and the reason.
 
-use super::{CableControl, Scene};
+use super::{CableControl, LoadSpec, Scene};
 use crate::error::SceneError;
 
 /// Lengths below this fraction of the structure's size count as zero.
@@ -105,6 +105,42 @@ pub(super) fn validate(scene: &Scene) -> Result<(), SceneError> {
                 i + 1
             ),
         ));
+    }
+    for (k, load) in scene.loads.iter().enumerate() {
+        let key = format!("loads[{}]", k + 1);
+        let i = node(format!("{key}.node"), load.node())?;
+        if fixed[i] {
+            return Err(SceneError::invalid(
+                format!("{key}.node"),
+                format!(
+                    "node {} is pinned, so a load on it would have no effect",
+                    i + 1
+                ),
+            ));
+        }
+        match load {
+            LoadSpec::Constant { force, .. } => finite_vec(&format!("{key}.force"), force)?,
+            LoadSpec::Sinusoidal {
+                amplitude,
+                frequency,
+                phase,
+                ..
+            } => {
+                finite_vec(&format!("{key}.amplitude"), amplitude)?;
+                finite(&format!("{key}.frequency"), *frequency)?;
+                finite(&format!("{key}.phase"), *phase)?;
+                if *frequency < 0.0 {
+                    return Err(SceneError::invalid(
+                        format!("{key}.frequency"),
+                        format!("must be ≥ 0, got {frequency}"),
+                    ));
+                }
+            }
+            LoadSpec::Step { force, time, .. } => {
+                finite_vec(&format!("{key}.force"), force)?;
+                finite(&format!("{key}.time"), *time)?;
+            }
+        }
     }
     if let Some(g) = &scene.gravity {
         finite_vec("gravity", g)?;

@@ -96,12 +96,12 @@ struct System<'a> {
 }
 
 impl Rhs for System<'_> {
-    fn eval(&mut self, _t: f64, y: &[f64], dy: &mut [f64]) {
+    fn eval(&mut self, t: f64, y: &[f64], dy: &mut [f64]) {
         let half = y.len() / 2;
         let (q, v) = y.split_at(half);
         let (dq, dv) = dy.split_at_mut(half);
         dq.copy_from_slice(v);
-        dynamics::accelerations(self.model, self.inputs, q, v, self.ws, dv);
+        dynamics::accelerations(self.model, self.inputs, t, q, v, self.ws, dv);
     }
 
     fn project_positions(&mut self, y: &mut [f64], before: &[f64], moved: &mut [f64]) {
@@ -245,7 +245,16 @@ impl Simulation {
     pub fn refresh(&mut self) {
         let half = self.state.y.len() / 2;
         let (q, v) = self.state.y.split_at(half);
-        dynamics::accelerations(&self.model, &self.inputs, q, v, &mut self.ws, &mut self.acc);
+        let t = self.state.time;
+        dynamics::accelerations(
+            &self.model,
+            &self.inputs,
+            t,
+            q,
+            v,
+            &mut self.ws,
+            &mut self.acc,
+        );
     }
 
     /// The workspace of the last evaluation (node positions, γ, λ, …).

@@ -27,7 +27,16 @@ impl Simulation {
         let q0: Vec<f64> = self.state.y[..half].to_vec();
         let zero = vec![0.0; half];
         let mut a0 = vec![0.0; half];
-        dynamics::accelerations(&self.model, &self.inputs, &q0, &zero, &mut self.ws, &mut a0);
+        let t = self.state.time;
+        dynamics::accelerations(
+            &self.model,
+            &self.inputs,
+            t,
+            &q0,
+            &zero,
+            &mut self.ws,
+            &mut a0,
+        );
         let scale = self
             .model
             .lengths()
@@ -50,7 +59,15 @@ impl Simulation {
             for ((qi, q0i), xi) in q.iter_mut().zip(&q0).zip(&x) {
                 *qi = q0i + eps * xi / norm;
             }
-            dynamics::accelerations(&self.model, &self.inputs, &q, &zero, &mut self.ws, &mut a);
+            dynamics::accelerations(
+                &self.model,
+                &self.inputs,
+                t,
+                &q,
+                &zero,
+                &mut self.ws,
+                &mut a,
+            );
             for ((xi, ai), a0i) in x.iter_mut().zip(&a).zip(&a0) {
                 *xi = (ai - a0i) / eps;
             }

@@ -201,6 +201,7 @@ pub fn bare(name: &str, nodes: Vec<[f64; 3]>, fixed: Vec<usize>) -> Scene {
         gravity: None,
         force_inputs: Vec::new(),
         velocities: None,
+        loads: Vec::new(),
         prestress: None,
         solver: Default::default(),
     }
