@@ -144,9 +144,7 @@ impl Simulation {
             self.integrator.after_correction();
         }
         if let Some(i) = self.state.y.iter().position(|x| !x.is_finite()) {
-            self.state.y.copy_from_slice(&self.last_good);
-            self.integrator.invalidate();
-            self.refresh();
+            self.restore_last_good();
             let half = self.state.y.len() / 2;
             let what = if i < half { "position" } else { "velocity" };
             return Err(StepError::NonFinite {
@@ -156,14 +154,18 @@ impl Simulation {
         }
         if !self.correction {
             if let Err(e) = self.check_drift(t) {
-                self.state.y.copy_from_slice(&self.last_good);
-                self.integrator.invalidate();
-                self.refresh();
+                self.restore_last_good();
                 return Err(e);
             }
         }
         self.stats.steps += 1;
         Ok(outcome)
+    }
+
+    fn restore_last_good(&mut self) {
+        self.state.y.copy_from_slice(&self.last_good);
+        self.integrator.invalidate();
+        self.refresh();
     }
 
     /// Without the correction nothing holds the bars; past 1% of a length the run is
