@@ -3,6 +3,7 @@
 
 use std::io::Write;
 
+pub use crate::scene::OutputGroup;
 use crate::sim::Simulation;
 
 /// A reportable value.
@@ -40,6 +41,20 @@ pub struct Output {
 const AXES: [&str; 3] = ["x", "y", "z"];
 
 impl Quantity {
+    /// The output group it belongs to.
+    pub fn group(self) -> OutputGroup {
+        match self {
+            Self::NodePosition(..) => OutputGroup::Positions,
+            Self::NodeVelocity(..) => OutputGroup::Velocities,
+            Self::CableTension(_) => OutputGroup::Tensions,
+            Self::BarForce(_) => OutputGroup::BarForces,
+            Self::LengthError | Self::OrthogonalityError => OutputGroup::Diagnostics,
+            Self::Energy => OutputGroup::Energy,
+        }
+    }
+}
+
+impl Quantity {
     /// Reads the value from a simulation whose outputs are fresh.
     pub fn value(self, sim: &Simulation) -> f64 {
         match self {
@@ -54,8 +69,16 @@ impl Quantity {
     }
 }
 
-/// Every output of a model, in a fixed order.
+/// The outputs of a model, in a fixed order: the groups its scene selects (all by default).
 pub fn outputs(sim: &Simulation) -> Vec<Output> {
+    let mut out = all_outputs(sim);
+    if let Some(groups) = &sim.model().scene.outputs {
+        out.retain(|o| groups.contains(&o.quantity.group()));
+    }
+    out
+}
+
+fn all_outputs(sim: &Simulation) -> Vec<Output> {
     let model = sim.model();
     let mut out = Vec::new();
     for n in 0..model.n_nodes() {

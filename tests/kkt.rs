@@ -129,6 +129,7 @@ fn random_scene(seed: u64) -> Scene {
         force_inputs: vec![10, 8],
         velocities: Some(velocities),
         loads: Vec::new(),
+        outputs: None,
         prestress: None,
         solver: SolverSpec::default(),
     }

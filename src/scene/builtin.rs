@@ -104,6 +104,7 @@ pub fn tower_scene(stages: usize, stiffness: Option<f64>, name: &str) -> Scene {
         force_inputs: (0..3).map(|i| id(stages, i)).collect(),
         velocities: None,
         loads: Vec::new(),
+        outputs: None,
         prestress: Some(PrestressSpec {
             min_tension: PRESTRESS_TENSION,
         }),
@@ -177,6 +178,7 @@ fn icosahedron() -> Scene {
         gravity: None,
         velocities: None,
         loads: Vec::new(),
+        outputs: None,
         prestress: Some(PrestressSpec {
             min_tension: PRESTRESS_TENSION,
         }),

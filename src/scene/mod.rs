@@ -42,6 +42,9 @@ pub struct Scene {
     /// Initial node velocities `[vx, vy, vz]` in m/s, one per node.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub velocities: Option<Vec<[f64; 3]>>,
+    /// Output groups to expose (CSV columns and FMU variables); all when absent.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub outputs: Option<Vec<OutputGroup>>,
     /// Scripted loads on nodes, evaluated at the integrator's stage times.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub loads: Vec<LoadSpec>,
@@ -92,6 +95,24 @@ pub struct CableSpec {
     /// Start force density in N/m (controlled cables; omit when `prestress` derives it).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub force_density: Option<f64>,
+}
+
+/// Groups of outputs a scene can select.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum OutputGroup {
+    /// `node[i].x/y/z`.
+    Positions,
+    /// `node[i].vx/vy/vz`.
+    Velocities,
+    /// `cable[j].tension`.
+    Tensions,
+    /// `bar[k].force`.
+    BarForces,
+    /// `constraint.length_error`, `constraint.orthogonality_error`.
+    Diagnostics,
+    /// `energy.total`.
+    Energy,
 }
 
 /// A scripted load on one node (N), a function of time only.

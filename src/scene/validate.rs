@@ -106,6 +106,20 @@ pub(super) fn validate(scene: &Scene) -> Result<(), SceneError> {
             ),
         ));
     }
+    if let Some(groups) = &scene.outputs {
+        if groups.is_empty() {
+            return Err(SceneError::invalid(
+                "outputs",
+                "selects no output group; omit the key to expose all of them",
+            ));
+        }
+        if let Some(k) = (1..groups.len()).find(|&k| groups[..k].contains(&groups[k])) {
+            return Err(SceneError::invalid(
+                format!("outputs[{}]", k + 1),
+                "group listed twice",
+            ));
+        }
+    }
     for (k, load) in scene.loads.iter().enumerate() {
         let key = format!("loads[{}]", k + 1);
         let i = node(format!("{key}.node"), load.node())?;

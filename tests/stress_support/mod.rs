@@ -202,6 +202,7 @@ pub fn bare(name: &str, nodes: Vec<[f64; 3]>, fixed: Vec<usize>) -> Scene {
         force_inputs: Vec::new(),
         velocities: None,
         loads: Vec::new(),
+        outputs: None,
         prestress: None,
         solver: Default::default(),
     }
