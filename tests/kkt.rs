@@ -147,22 +147,25 @@ fn set_loads(sim: &mut Simulation, rng: &mut Lcg) {
 
 /// Cable force density from the law in dynamics.md, computed independently of the library.
 fn gamma(law: &CableLaw, inputs: &Inputs, s: &Vector3<f64>, sd: &Vector3<f64>) -> f64 {
-    match *law {
+    let (stiffness, rest_length, damping) = match *law {
+        CableLaw::Controlled { input } => return inputs.force_density[input].max(0.0),
         CableLaw::Elastic {
             stiffness,
             rest_length,
             damping,
-        } => {
-            let l = s.norm();
-            if l > rest_length {
-                let g = stiffness * (1.0 - rest_length / l)
-                    + damping.unwrap_or(0.0) * s.dot(sd) / (l * l);
-                g.max(0.0)
-            } else {
-                0.0
-            }
-        }
-        CableLaw::Controlled { input } => inputs.force_density[input].max(0.0),
+        } => (stiffness, rest_length, damping),
+        CableLaw::RestLengthControlled {
+            stiffness,
+            damping,
+            input,
+        } => (stiffness, inputs.rest_length[input].max(0.0), damping),
+    };
+    let l = s.norm();
+    if l > rest_length {
+        let g = stiffness * (1.0 - rest_length / l) + damping.unwrap_or(0.0) * s.dot(sd) / (l * l);
+        g.max(0.0)
+    } else {
+        0.0
     }
 }
 
@@ -343,6 +346,7 @@ fn check_energy_gradient(scene: Scene, seed: u64) {
     let inputs = Inputs {
         force_density: sim.inputs.force_density.clone(),
         node_force: vec![Vector3::zeros(); model.force_inputs.len()],
+        rest_length: sim.inputs.rest_length.clone(),
     };
     let mut ws = Workspace::new(model);
     kinematics(model, q, &vec![0.0; half], &mut ws);

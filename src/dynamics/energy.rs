@@ -31,6 +31,12 @@ pub fn potential(model: &Model, inputs: &Inputs, ws: &Workspace) -> f64 {
                 rest_length,
                 ..
             } => 0.5 * stiffness * (s.norm() - rest_length).max(0.0).powi(2),
+            CableLaw::RestLengthControlled {
+                stiffness, input, ..
+            } => {
+                let rest_length = inputs.rest_length[input].max(0.0);
+                0.5 * stiffness * (s.norm() - rest_length).max(0.0).powi(2)
+            }
             CableLaw::Controlled { .. } => {
                 0.5 * cable_force_density(&cable.law, inputs, &s, &Vector3::zeros())
                     * s.norm_squared()

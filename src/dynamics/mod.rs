@@ -21,6 +21,8 @@ pub struct Inputs {
     pub force_density: Vec<f64>,
     /// External force per force-input node, N.
     pub node_force: Vec<Vector3<f64>>,
+    /// Commanded rest length per rest-length controlled cable, m (clamped at ≥ 0 when used).
+    pub rest_length: Vec<f64>,
 }
 
 impl Inputs {
@@ -29,7 +31,15 @@ impl Inputs {
         Self {
             force_density: model.controlled_start.clone(),
             node_force: vec![Vector3::zeros(); model.force_inputs.len()],
+            rest_length: model.reeled_start.clone(),
         }
+    }
+
+    /// Copies `other` in place (same model, so no allocation).
+    pub fn copy_from(&mut self, other: &Inputs) {
+        self.force_density.copy_from_slice(&other.force_density);
+        self.node_force.copy_from_slice(&other.node_force);
+        self.rest_length.copy_from_slice(&other.rest_length);
     }
 }
 
@@ -132,17 +142,35 @@ pub fn cable_force_density(
             stiffness,
             rest_length,
             damping,
+        } => elastic_force_density(stiffness, rest_length, damping, s, s_dot),
+        CableLaw::RestLengthControlled {
+            stiffness,
+            damping,
+            input,
         } => {
-            let len = s.norm();
-            if len <= rest_length {
-                return 0.0;
-            }
-            let elastic = stiffness * (1.0 - rest_length / len);
-            let viscous = damping.map_or(0.0, |c| c * s.dot(s_dot) / (len * len));
-            (elastic + viscous).max(0.0)
+            let rest_length = inputs.rest_length[input].max(0.0);
+            elastic_force_density(stiffness, rest_length, damping, s, s_dot)
         }
         CableLaw::Controlled { input } => inputs.force_density[input].max(0.0),
     }
+}
+
+/// `κ (1 − s₀/|s|) + c (s·ṡ)/|s|²` while taut, else 0; clamped at ≥ 0.
+#[inline]
+fn elastic_force_density(
+    stiffness: f64,
+    rest_length: f64,
+    damping: Option<f64>,
+    s: &Vector3<f64>,
+    s_dot: &Vector3<f64>,
+) -> f64 {
+    let len = s.norm();
+    if len <= rest_length {
+        return 0.0;
+    }
+    let elastic = stiffness * (1.0 - rest_length / len);
+    let viscous = damping.map_or(0.0, |c| c * s.dot(s_dot) / (len * len));
+    (elastic + viscous).max(0.0)
 }
 
 /// Stage 2: cable, input, scripted-load and gravity forces on the bar ends at time `t`

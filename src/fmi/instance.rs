@@ -8,6 +8,7 @@ use std::path::Path;
 use super::snapshot::Snapshot;
 use super::variables::{BaseType, Binding, VariableTable};
 use super::{guid_for, Category, Message, Mode, Status};
+use crate::dynamics::Inputs;
 use crate::integrator::Method;
 use crate::model::Model;
 use crate::scene::Scene;
@@ -92,7 +93,7 @@ impl Instance {
         let core = Core {
             scene: sim.model().explicit_scene(),
             table: VariableTable::new(&sim),
-            warned_negative: vec![false; sim.model().controlled.len()],
+            warned_negative: vec![false; sim.model().controlled.len() + sim.model().reeled.len()],
             sim,
             mode: Mode::Instantiated,
             time: 0.0,
@@ -357,7 +358,10 @@ impl Instance {
                     "{call}: {name} = {value} is not a finite number"
                 )));
             }
-            let fixed = !matches!(binding, Binding::ForceDensity(_) | Binding::NodeForce(..));
+            let fixed = !matches!(
+                binding,
+                Binding::ForceDensity(_) | Binding::NodeForce(..) | Binding::ReelInput(_)
+            );
             if matches!(binding, Binding::Output(_)) {
                 return Err(error(format!(
                     "{call}: {name} is an output and cannot be set"
@@ -378,9 +382,23 @@ impl Instance {
                             format!("{call}: {name} = {value} is negative; a cable cannot push, so it acts as 0 (warned once)"),
                         );
                     }
-                    next.force_density[k] = value;
+                    next.inputs.force_density[k] = value;
                 }
-                Binding::NodeForce(k, axis) => next.node_force[k][axis] = value,
+                Binding::ReelInput(k) => {
+                    let flag = self.core.sim.model().controlled.len() + k;
+                    if value < 0.0 && !next.warned_negative[flag] {
+                        next.warned_negative[flag] = true;
+                        status = Status::Warning;
+                        self.log(
+                            Category::Warning,
+                            format!(
+                                "{call}: {name} = {value} is negative; it acts as 0 (warned once)"
+                            ),
+                        );
+                    }
+                    next.inputs.rest_length[k] = value;
+                }
+                Binding::NodeForce(k, axis) => next.inputs.node_force[k][axis] = value,
                 Binding::Method if Method::from_fmi_value(value).is_none() => {
                     return Err(error(format!(
                         "{call}: {name} = {value} is not a method (1 = rk4, 2 = dopri5, 3 = rattle)"
@@ -498,8 +516,7 @@ impl Instance {
 /// The parts of [`Core`] that a set call may change, applied only if all values pass.
 pub(super) struct PendingSet {
     scene: Scene,
-    force_density: Vec<f64>,
-    node_force: Vec<nalgebra::Vector3<f64>>,
+    inputs: Inputs,
     warned_negative: Vec<bool>,
     rebuild: bool,
 }
@@ -513,6 +530,7 @@ impl Core {
             Binding::Output(q) => q.value(sim),
             Binding::ForceDensity(k) => sim.inputs.force_density[k],
             Binding::NodeForce(k, axis) => sim.inputs.node_force[k][axis],
+            Binding::ReelInput(k) => sim.inputs.rest_length[k],
             Binding::StepSize => core.scene.solver.step_size,
             Binding::Correction => f64::from(u8::from(core.scene.solver.correction)),
             Binding::Method => f64::from(core.scene.solver.method.fmi_value()),
@@ -528,8 +546,7 @@ impl Core {
     fn clone_for_set(&self) -> PendingSet {
         PendingSet {
             scene: self.scene.clone(),
-            force_density: self.sim.inputs.force_density.clone(),
-            node_force: self.sim.inputs.node_force.clone(),
+            inputs: self.sim.inputs.clone(),
             warned_negative: self.warned_negative.clone(),
             rebuild: self.rebuild,
         }
@@ -537,8 +554,7 @@ impl Core {
 
     fn commit_set(&mut self, next: PendingSet) {
         self.scene = next.scene;
-        self.sim.inputs.force_density = next.force_density;
-        self.sim.inputs.node_force = next.node_force;
+        self.sim.inputs = next.inputs;
         self.warned_negative = next.warned_negative;
         self.rebuild = next.rebuild;
         self.stale = true;
@@ -560,6 +576,9 @@ pub(super) fn apply_parameter(scene: &mut Scene, binding: Binding, value: f64) {
         Binding::RestLength(j) => scene.cables[j].rest_length = Some(value),
         Binding::Damping(j) => scene.cables[j].damping = Some(value),
         Binding::Mass(i) => scene.bars[i].mass = value,
-        Binding::Output(_) | Binding::ForceDensity(_) | Binding::NodeForce(..) => {}
+        Binding::Output(_)
+        | Binding::ForceDensity(_)
+        | Binding::NodeForce(..)
+        | Binding::ReelInput(_) => {}
     }
 }

@@ -14,7 +14,7 @@ use crate::sim::{Simulation, State};
 use fmi2_model_description::Causality;
 
 const MAGIC: &[u8; 8] = b"TNSGSTAT";
-const VERSION: u32 = 2;
+const VERSION: u32 = 3;
 /// A SHA-256 of everything before it closes the buffer, so corruption is caught.
 const DIGEST_LEN: usize = 32;
 
@@ -28,6 +28,7 @@ pub struct Snapshot {
     state: State,
     force_density: Vec<f64>,
     node_force: Vec<Vector3<f64>>,
+    rest_length: Vec<f64>,
     warned_negative: Vec<bool>,
     rebuild: bool,
     /// Values of the parameter variables, in table order.
@@ -48,6 +49,7 @@ impl Snapshot {
             state: core.sim.state().clone(),
             force_density: core.sim.inputs.force_density.clone(),
             node_force: core.sim.inputs.node_force.clone(),
+            rest_length: core.sim.inputs.rest_length.clone(),
             warned_negative: core.warned_negative.clone(),
             rebuild: core.rebuild,
             parameters: parameter_bindings(core).map(|b| core.read(b)).collect(),
@@ -79,12 +81,14 @@ impl Snapshot {
         let sizes_match = self.state.y.len() == sim.state().y.len()
             && self.force_density.len() == sim.inputs.force_density.len()
             && self.node_force.len() == sim.inputs.node_force.len()
+            && self.rest_length.len() == sim.inputs.rest_length.len()
             && self.warned_negative.len() == core.warned_negative.len();
         if !sizes_match {
             return Err("the state does not match this FMU's structure".into());
         }
         sim.inputs.force_density = self.force_density.clone();
         sim.inputs.node_force = self.node_force.clone();
+        sim.inputs.rest_length = self.rest_length.clone();
         sim.set_state(self.state.clone());
         sim.restore_carried(self.h_next, &self.carried);
         core.sim = sim;
@@ -116,6 +120,8 @@ impl Snapshot {
         for f in &self.node_force {
             put_f64s(&mut out, f.as_slice());
         }
+        put_len(&mut out, self.rest_length.len());
+        put_f64s(&mut out, &self.rest_length);
         put_bytes(
             &mut out,
             &self
@@ -172,6 +178,8 @@ impl Snapshot {
         let node_force = (0..n)
             .map(|_| Ok(Vector3::new(r.f64()?, r.f64()?, r.f64()?)))
             .collect::<Result<Vec<_>, String>>()?;
+        let n = r.len()?;
+        let rest_length = r.f64s(n)?;
         let warned_negative = r.bytes()?.iter().map(|&b| b != 0).collect();
         let rebuild = r.u8()? != 0;
         let n = r.len()?;
@@ -189,6 +197,7 @@ impl Snapshot {
             .iter()
             .chain(&y)
             .chain(&force_density)
+            .chain(&rest_length)
             .chain(&parameters)
             .chain(&carried)
             .chain([h_next].iter())
@@ -208,6 +217,7 @@ impl Snapshot {
             },
             force_density,
             node_force,
+            rest_length,
             warned_negative,
             rebuild,
             parameters,

@@ -17,6 +17,8 @@ pub enum Binding {
     ForceDensity(usize),
     /// Force input `k` (node in `force_inputs` order), axis 0..3.
     NodeForce(usize, usize),
+    /// Rest-length input of reeled cable input `k`.
+    ReelInput(usize),
     /// `solver.step_size`.
     StepSize,
     /// `solver.correction`.
@@ -230,6 +232,30 @@ fn parameters(model: &Model, vars: &mut Vec<Variable>) {
             }
         }
     }
+    for (j, cable) in model.cables.iter().enumerate() {
+        if let CableLaw::RestLengthControlled {
+            stiffness, damping, ..
+        } = cable.law
+        {
+            let c = j + 1;
+            vars.push(parameter(
+                format!("cable[{c}].stiffness"),
+                Some("N/m"),
+                format!("stiffness of reeled cable {c}"),
+                stiffness,
+                Binding::Stiffness(j),
+            ));
+            if let Some(d) = damping {
+                vars.push(parameter(
+                    format!("cable[{c}].damping"),
+                    Some("N.s/m"),
+                    format!("damping of cable {c} on its extension rate, while taut"),
+                    d,
+                    Binding::Damping(j),
+                ));
+            }
+        }
+    }
     for (i, bar) in model.bars.iter().enumerate() {
         vars.push(parameter(
             format!("bar[{}].mass", i + 1),
@@ -273,6 +299,18 @@ fn inputs(model: &Model, vars: &mut Vec<Variable>) {
             ),
             model.controlled_start[k],
             Binding::ForceDensity(k),
+        ));
+    }
+    for (k, &j) in model.reeled.iter().enumerate() {
+        vars.push(input(
+            format!("cable[{}].rest_length", j + 1),
+            "m",
+            format!(
+                "commanded rest length of cable {} (reeled by a motor; negative values act as 0)",
+                j + 1
+            ),
+            model.reeled_start[k],
+            Binding::ReelInput(k),
         ));
     }
     for (k, &n) in model.force_inputs.iter().enumerate() {

@@ -41,6 +41,16 @@ pub enum CableLaw {
         /// Index into the controlled-cable inputs.
         input: usize,
     },
+    /// Elastic, with the rest length input number `input` of
+    /// [`Inputs::rest_length`](crate::dynamics::Inputs) (clamped at ≥ 0).
+    RestLengthControlled {
+        /// κ in N/m.
+        stiffness: f64,
+        /// c in N·s/m, if the scene gives damping.
+        damping: Option<f64>,
+        /// Index into the rest-length inputs.
+        input: usize,
+    },
 }
 
 /// A cable between physical nodes (0-based).
@@ -75,6 +85,10 @@ pub struct Model {
     pub controlled: Vec<usize>,
     /// Start force density of each controlled-cable input, N/m.
     pub controlled_start: Vec<f64>,
+    /// Cable index of each rest-length input.
+    pub reeled: Vec<usize>,
+    /// Start rest length of each rest-length input, m.
+    pub reeled_start: Vec<f64>,
     /// Solver settings.
     pub solver: SolverSpec,
     /// Reduced coordinates.
@@ -114,8 +128,7 @@ impl Model {
             })
             .collect();
         let mut warnings = Vec::new();
-        let (cables, controlled, controlled_start) =
-            build_cables(scene, &positions, &pinned, &bars)?;
+        let built = build_cables(scene, &positions, &pinned, &bars)?;
         let bar_pairs: Vec<(usize, usize)> =
             bars.iter().map(|b| (b.nodes[0], b.nodes[1])).collect();
         let coords = Coordinates::new(&bar_pairs, &positions, &pinned, basis)?;
@@ -154,7 +167,7 @@ impl Model {
             positions,
             pinned,
             bars,
-            cables,
+            cables: built.cables,
             gravity: scene.gravity.map(Vector3::from),
             force_inputs: scene.force_inputs.iter().map(|&n| n - 1).collect(),
             loads: scene
@@ -162,8 +175,10 @@ impl Model {
                 .iter()
                 .map(|l| (l.node() - 1, l.clone()))
                 .collect(),
-            controlled,
-            controlled_start,
+            controlled: built.controlled,
+            controlled_start: built.controlled_start,
+            reeled: built.reeled,
+            reeled_start: built.reeled_start,
             solver: scene.solver.clone(),
             coords,
             correction,
@@ -203,13 +218,23 @@ impl Model {
                 CableLaw::Controlled { input } => {
                     spec.force_density = Some(self.controlled_start[input])
                 }
+                CableLaw::RestLengthControlled { input, .. } => {
+                    spec.rest_length = Some(self.reeled_start[input])
+                }
             }
         }
         scene
     }
 }
 
-type CableBuild = (Vec<Cable>, Vec<usize>, Vec<f64>);
+#[derive(Default)]
+struct CableBuild {
+    cables: Vec<Cable>,
+    controlled: Vec<usize>,
+    controlled_start: Vec<f64>,
+    reeled: Vec<usize>,
+    reeled_start: Vec<f64>,
+}
 
 fn build_cables(
     scene: &Scene,
@@ -231,23 +256,21 @@ fn build_cables(
         )?),
         None => None,
     };
-    let mut cables = Vec::new();
-    let mut controlled = Vec::new();
-    let mut controlled_start = Vec::new();
+    let mut built = CableBuild::default();
     for (j, spec) in scene.cables.iter().enumerate() {
         let nodes = [spec.nodes[0] - 1, spec.nodes[1] - 1];
         let length = (positions[nodes[1]] - positions[nodes[0]]).norm();
         let gamma = stress.as_ref().map(|s| s.cables[j]);
         let law = match spec.control {
             Some(CableControl::ForceDensity) => {
-                controlled.push(j);
+                built.controlled.push(j);
                 let start = gamma.or(spec.force_density).expect("validated");
-                controlled_start.push(start);
+                built.controlled_start.push(start);
                 CableLaw::Controlled {
-                    input: controlled.len() - 1,
+                    input: built.controlled.len() - 1,
                 }
             }
-            None => {
+            control => {
                 let stiffness = spec.stiffness.expect("validated");
                 let rest_length = match gamma {
                     Some(g) if g >= stiffness => {
@@ -263,14 +286,24 @@ fn build_cables(
                     Some(g) => length * (1.0 - g / stiffness),
                     None => spec.rest_length.expect("validated"),
                 };
-                CableLaw::Elastic {
-                    stiffness,
-                    rest_length,
-                    damping: spec.damping,
+                if control == Some(CableControl::RestLength) {
+                    built.reeled.push(j);
+                    built.reeled_start.push(rest_length);
+                    CableLaw::RestLengthControlled {
+                        stiffness,
+                        damping: spec.damping,
+                        input: built.reeled.len() - 1,
+                    }
+                } else {
+                    CableLaw::Elastic {
+                        stiffness,
+                        rest_length,
+                        damping: spec.damping,
+                    }
                 }
             }
         };
-        cables.push(Cable { nodes, law });
+        built.cables.push(Cable { nodes, law });
     }
-    Ok((cables, controlled, controlled_start))
+    Ok(built)
 }

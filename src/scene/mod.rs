@@ -72,6 +72,8 @@ pub struct BarSpec {
 pub enum CableControl {
     /// The force density is an input (N/m).
     ForceDensity,
+    /// An elastic cable whose rest length is an input (m): a motor reeling the cable.
+    RestLength,
 }
 
 /// A cable between two nodes.

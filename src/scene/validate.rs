@@ -245,7 +245,7 @@ fn validate_cable_law(scene: &Scene, key: &str, j: usize) -> Result<(), SceneErr
                 _ => Ok(()),
             }
         }
-        None => {
+        None | Some(CableControl::RestLength) => {
             if cable.force_density.is_some() {
                 return conflict(
                     "force_density",

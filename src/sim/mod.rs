@@ -191,12 +191,7 @@ impl Simulation {
     pub fn restore_carried(&mut self, h_next: f64, values: &[f64]) {
         self.h_next = h_next;
         self.integrator.restore_carried(values);
-        self.stepped_inputs
-            .force_density
-            .copy_from_slice(&self.inputs.force_density);
-        self.stepped_inputs
-            .node_force
-            .copy_from_slice(&self.inputs.node_force);
+        self.stepped_inputs.copy_from(&self.inputs);
     }
 
     /// Steps taken and rejected so far.
@@ -225,6 +220,14 @@ impl Simulation {
                 return Err(StepError::NonFiniteInput {
                     name: format!("cable[{}].force_density", self.model.controlled[k] + 1),
                     value: g,
+                });
+            }
+        }
+        for (k, &l) in self.inputs.rest_length.iter().enumerate() {
+            if !l.is_finite() {
+                return Err(StepError::NonFiniteInput {
+                    name: format!("cable[{}].rest_length", self.model.reeled[k] + 1),
+                    value: l,
                 });
             }
         }

@@ -202,13 +202,8 @@ impl Simulation {
     /// Values an integrator carries between steps (RATTLE's acceleration, Dormand–Prince's
     /// last stage) were computed with the old inputs: drop them when the inputs changed.
     fn note_input_changes(&mut self) {
-        let old = &mut self.stepped_inputs;
-        if old.force_density != self.inputs.force_density
-            || old.node_force != self.inputs.node_force
-        {
-            old.force_density
-                .copy_from_slice(&self.inputs.force_density);
-            old.node_force.copy_from_slice(&self.inputs.node_force);
+        if self.stepped_inputs != self.inputs {
+            self.stepped_inputs.copy_from(&self.inputs);
             self.integrator.invalidate();
         }
     }
