@@ -200,60 +200,43 @@ fn parameters(model: &Model, vars: &mut Vec<Variable>) {
         Binding::Atol,
     ));
     for (j, cable) in model.cables.iter().enumerate() {
-        if let CableLaw::Elastic {
-            stiffness,
-            rest_length,
-            damping,
-        } = cable.law
-        {
-            let c = j + 1;
-            vars.push(parameter(
-                format!("cable[{c}].stiffness"),
-                Some("N/m"),
-                format!("stiffness of elastic cable {c}"),
+        let c = j + 1;
+        let (stiffness, rest_length, damping, kind) = match cable.law {
+            CableLaw::Elastic {
                 stiffness,
-                Binding::Stiffness(j),
-            ));
+                rest_length,
+                damping,
+            } => (stiffness, Some(rest_length), damping, "elastic"),
+            // A reeled cable's rest length is an input, not a parameter.
+            CableLaw::RestLengthControlled {
+                stiffness, damping, ..
+            } => (stiffness, None, damping, "reeled"),
+            CableLaw::Controlled { .. } => continue,
+        };
+        vars.push(parameter(
+            format!("cable[{c}].stiffness"),
+            Some("N/m"),
+            format!("stiffness of {kind} cable {c}"),
+            stiffness,
+            Binding::Stiffness(j),
+        ));
+        if let Some(l) = rest_length {
             vars.push(parameter(
                 format!("cable[{c}].rest_length"),
                 Some("m"),
                 format!("rest length of elastic cable {c}"),
-                rest_length,
+                l,
                 Binding::RestLength(j),
             ));
-            if let Some(d) = damping {
-                vars.push(parameter(
-                    format!("cable[{c}].damping"),
-                    Some("N.s/m"),
-                    format!("damping of cable {c} on its extension rate, while taut"),
-                    d,
-                    Binding::Damping(j),
-                ));
-            }
         }
-    }
-    for (j, cable) in model.cables.iter().enumerate() {
-        if let CableLaw::RestLengthControlled {
-            stiffness, damping, ..
-        } = cable.law
-        {
-            let c = j + 1;
+        if let Some(d) = damping {
             vars.push(parameter(
-                format!("cable[{c}].stiffness"),
-                Some("N/m"),
-                format!("stiffness of reeled cable {c}"),
-                stiffness,
-                Binding::Stiffness(j),
+                format!("cable[{c}].damping"),
+                Some("N.s/m"),
+                format!("damping of cable {c} on its extension rate, while taut"),
+                d,
+                Binding::Damping(j),
             ));
-            if let Some(d) = damping {
-                vars.push(parameter(
-                    format!("cable[{c}].damping"),
-                    Some("N.s/m"),
-                    format!("damping of cable {c} on its extension rate, while taut"),
-                    d,
-                    Binding::Damping(j),
-                ));
-            }
         }
     }
     for (i, bar) in model.bars.iter().enumerate() {
