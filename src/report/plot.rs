@@ -189,16 +189,27 @@ pub(crate) fn work_precision(report: &Report, path: &Path) -> Result<(), String>
             }))
             .map_err(io(path))?;
     }
+    draw_legend(&mut chart, SeriesLabelPosition::LowerLeft).map_err(io(path))?;
+    root.present().map_err(io(path))
+}
+
+/// The legend box both plots share.
+fn draw_legend<'a, DB, CT>(
+    chart: &mut ChartContext<'a, DB, CT>,
+    position: SeriesLabelPosition,
+) -> Result<(), DrawingAreaErrorKind<DB::ErrorType>>
+where
+    DB: DrawingBackend + 'a,
+    CT: CoordTranslate,
+{
     chart
         .configure_series_labels()
-        .position(SeriesLabelPosition::LowerLeft)
+        .position(position)
         .label_font(("sans-serif", 20))
         .legend_area_size(45)
         .background_style(WHITE.mix(0.9))
         .border_style(BLACK.mix(0.4))
         .draw()
-        .map_err(io(path))?;
-    root.present().map_err(io(path))
 }
 
 fn setting_kind(method: Method) -> &'static str {
@@ -345,14 +356,6 @@ pub(crate) fn constraint_error(report: &Report, path: &Path) -> Result<(), Strin
             .label(label)
             .legend(move |(x, y)| PathElement::new([(x, y), (x + 30, y)], c.stroke_width(3)));
     }
-    chart
-        .configure_series_labels()
-        .position(SeriesLabelPosition::UpperRight)
-        .label_font(("sans-serif", 20))
-        .legend_area_size(45)
-        .background_style(WHITE.mix(0.9))
-        .border_style(BLACK.mix(0.4))
-        .draw()
-        .map_err(io(path))?;
+    draw_legend(&mut chart, SeriesLabelPosition::UpperRight).map_err(io(path))?;
     root.present().map_err(io(path))
 }
