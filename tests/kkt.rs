@@ -129,6 +129,8 @@ fn random_scene(seed: u64) -> Scene {
         force_inputs: vec![10, 8],
         velocities: Some(velocities),
         loads: Vec::new(),
+        point_masses: Vec::new(),
+        ground: None,
         outputs: None,
         prestress: None,
         solver: SolverSpec::default(),

@@ -6,9 +6,10 @@ use nalgebra::Vector3;
 use super::{cable_force_density, Inputs, Workspace};
 use crate::model::{CableLaw, Model};
 
-/// Kinetic energy `½ tr(Ṅ M Ṅᵀ)`, J. Per bar: `(m/6)(|v_a|² + v_a·v_b + |v_b|²)`.
+/// Kinetic energy `½ tr(Ṅ M Ṅᵀ)`, J. Per bar: `(m/6)(|v_a|² + v_a·v_b + |v_b|²)` plus
+/// `½ p |v|²` per payload.
 pub fn kinetic(model: &Model, ws: &Workspace) -> f64 {
-    model
+    let rods: f64 = model
         .bars
         .iter()
         .enumerate()
@@ -16,10 +17,14 @@ pub fn kinetic(model: &Model, ws: &Workspace) -> f64 {
             let (va, vb) = (ws.end_vel[2 * i], ws.end_vel[2 * i + 1]);
             bar.mass / 6.0 * (va.norm_squared() + va.dot(&vb) + vb.norm_squared())
         })
-        .sum()
+        .sum();
+    let payloads: f64 = (model.payload.iter().zip(&ws.end_vel))
+        .map(|(p, v)| 0.5 * p * v.norm_squared())
+        .sum();
+    rods + payloads
 }
 
-/// Cable strain energy plus gravity potential, J. A controlled cable at constant γ
+/// Cable strain energy, gravity potential and ground penalty energy, J. A controlled cable at constant γ
 /// stores `½ γ |s|²`.
 pub fn potential(model: &Model, inputs: &Inputs, ws: &Workspace) -> f64 {
     let mut v = 0.0;
@@ -44,27 +49,28 @@ pub fn potential(model: &Model, inputs: &Inputs, ws: &Workspace) -> f64 {
         };
     }
     if let Some(g) = model.gravity {
-        for (i, bar) in model.bars.iter().enumerate() {
-            let centre = (ws.end_pos[2 * i] + ws.end_pos[2 * i + 1]) / 2.0;
-            v -= bar.mass * g.dot(&centre);
+        for (e, x) in ws.end_pos.iter().enumerate() {
+            v -= model.end_mass(e) * g.dot(x);
+        }
+    }
+    if let Some(ground) = &model.ground {
+        for &(n, _) in &ground.nodes {
+            v += ground.energy(&ws.node_pos[n]);
         }
     }
     v
 }
 
-/// Linear momentum `Σ m ṙ`, kg·m/s.
+/// Linear momentum `Σ m ṙ` (rods and payloads), kg·m/s.
 pub fn linear_momentum(model: &Model, ws: &Workspace) -> Vector3<f64> {
-    model
-        .bars
-        .iter()
-        .enumerate()
-        .map(|(i, bar)| (ws.end_vel[2 * i] + ws.end_vel[2 * i + 1]) * (bar.mass / 2.0))
+    (0..ws.end_vel.len())
+        .map(|e| ws.end_vel[e] * model.end_mass(e))
         .sum()
 }
 
-/// Angular momentum about the origin, `Σ m (r × ṙ + b × ḃ / 12)`, kg·m²/s.
+/// Angular momentum about the origin, `Σ m (r × ṙ + b × ḃ / 12) + Σ p x × ẋ`, kg·m²/s.
 pub fn angular_momentum(model: &Model, ws: &Workspace) -> Vector3<f64> {
-    model
+    let rods: Vector3<f64> = model
         .bars
         .iter()
         .enumerate()
@@ -76,7 +82,11 @@ pub fn angular_momentum(model: &Model, ws: &Workspace) -> Vector3<f64> {
             let bd = ws.end_vel[b] - ws.end_vel[a];
             (r.cross(&rd) + bv.cross(&bd) / 12.0) * bar.mass
         })
-        .sum()
+        .sum();
+    let payloads: Vector3<f64> = (model.payload.iter().zip(ws.end_pos.iter().zip(&ws.end_vel)))
+        .map(|(p, (x, v))| x.cross(v) * *p)
+        .sum();
+    rods + payloads
 }
 
 /// `max |‖bᵢ‖ − lᵢ|`, m.

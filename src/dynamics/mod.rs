@@ -1,17 +1,20 @@
 //! The equations of motion in reduced coordinates, evaluated in named stages:
 //! kinematics → forces → bar force densities λ → reactions Ω → accelerations η̈₂.
 //!
-//! Per bar, `(m/12) b̈ = (f_b − f_a)/2 + λ b` with `b·b̈ = −|ḃ|²` gives λ in closed form;
-//! M is block diagonal per bar, so end accelerations follow from the inverse block
-//! `[4 −2; −2 4]/m`. Ω enters λ through the end forces and comes from `N̈ P = 0`.
+//! The forces are the scene's declared effects ([`effects::Pipeline`]). M is block
+//! diagonal per bar, so with `b̈ = α g_a + β g_b` (see [`crate::model::inertia`]) and
+//! `b·b̈ = −|ḃ|²`, λ is closed-form per bar. Ω enters λ through the end forces and comes
+//! from `N̈ P = 0`; it is a stage only when the scene has pins or joints.
 
 mod block_cholesky;
+pub mod effects;
 pub mod energy;
 pub mod reactions;
 
 use nalgebra::Vector3;
 
 use crate::model::{CableLaw, Model};
+pub use effects::applied_forces;
 use reactions::Reactions;
 
 /// Values an importer sets between steps.
@@ -62,8 +65,9 @@ pub struct Workspace {
     pub gamma: Vec<f64>,
     /// Bar force densities λ (compression positive), N/m.
     pub lambda: Vec<f64>,
+    /// Ground contact force per contact point (`Ground::nodes` order), N.
+    pub contact_force: Vec<Vector3<f64>>,
     units: Vec<Vector3<f64>>,
-    masses: Vec<f64>,
     reactions: Reactions,
     /// Evaluations where the sparse reaction factor failed and the dense solve was used.
     pub dense_fallbacks: u64,
@@ -83,8 +87,11 @@ impl Workspace {
             node_vel: vec![Vector3::zeros(); nodes],
             gamma: vec![0.0; model.cables.len()],
             lambda: vec![0.0; model.bars.len()],
+            contact_force: vec![
+                Vector3::zeros();
+                model.ground.as_ref().map_or(0, |g| g.nodes.len())
+            ],
             units: vec![Vector3::zeros(); model.bars.len()],
-            masses: model.masses(),
             reactions: model.reactions.clone(),
             dense_fallbacks: 0,
         }
@@ -104,9 +111,13 @@ pub fn accelerations(
     kinematics(model, q, v, ws);
     applied_forces(model, inputs, t, ws);
     bar_response(model, ws);
-    if ws.reactions.size() > 0 {
-        add_reactions(model, ws);
-        bar_response(model, ws);
+    for constraint in &model.pipeline.constraints {
+        match constraint {
+            effects::ConstraintEffect::JointsAndPins => {
+                add_reactions(model, ws);
+                bar_response(model, ws);
+            }
+        }
     }
     acc.iter_mut().for_each(|a| *a = 0.0);
     for (e, a) in ws.end_acc.iter().enumerate() {
@@ -129,8 +140,8 @@ pub fn kinematics(model: &Model, q: &[f64], v: &[f64], ws: &mut Workspace) {
     }
 }
 
-/// Force density of one cable for extension vector `s` and its rate `s_dot`.
-#[inline]
+/// Force density of one cable for extension vector `s` and its rate `s_dot` (for
+/// reporting; the step runs the same laws through [`effects`]).
 pub fn cable_force_density(
     law: &CableLaw,
     inputs: &Inputs,
@@ -142,77 +153,22 @@ pub fn cable_force_density(
             stiffness,
             rest_length,
             damping,
-        } => elastic_force_density(stiffness, rest_length, damping, s, s_dot),
+        } => effects::damped_density(stiffness, rest_length, damping.unwrap_or(0.0), s, s_dot),
         CableLaw::RestLengthControlled {
             stiffness,
             damping,
             input,
         } => {
             let rest_length = inputs.rest_length[input].max(0.0);
-            elastic_force_density(stiffness, rest_length, damping, s, s_dot)
+            effects::damped_density(stiffness, rest_length, damping.unwrap_or(0.0), s, s_dot)
         }
         CableLaw::Controlled { input } => inputs.force_density[input].max(0.0),
     }
 }
 
-/// `κ (1 − s₀/|s|) + c (s·ṡ)/|s|²` while taut, else 0; clamped at ≥ 0.
-#[inline]
-fn elastic_force_density(
-    stiffness: f64,
-    rest_length: f64,
-    damping: Option<f64>,
-    s: &Vector3<f64>,
-    s_dot: &Vector3<f64>,
-) -> f64 {
-    let len = s.norm();
-    if len <= rest_length {
-        return 0.0;
-    }
-    let elastic = stiffness * (1.0 - rest_length / len);
-    let viscous = damping.map_or(0.0, |c| c * s.dot(s_dot) / (len * len));
-    (elastic + viscous).max(0.0)
-}
-
-/// Stage 2: cable, input, scripted-load and gravity forces on the bar ends at time `t`
-/// (forces on a bar-less pinned node are taken by its pin).
-pub fn applied_forces(model: &Model, inputs: &Inputs, t: f64, ws: &mut Workspace) {
-    ws.end_force.iter_mut().for_each(|f| *f = Vector3::zeros());
-    let node_end = &model.coords.node_end;
-    for (j, cable) in model.cables.iter().enumerate() {
-        let [a, b] = cable.nodes;
-        let s = ws.node_pos[b] - ws.node_pos[a];
-        let s_dot = ws.node_vel[b] - ws.node_vel[a];
-        let gamma = cable_force_density(&cable.law, inputs, &s, &s_dot);
-        ws.gamma[j] = gamma;
-        if let Some(e) = node_end[a] {
-            ws.end_force[e] += s * gamma;
-        }
-        if let Some(e) = node_end[b] {
-            ws.end_force[e] -= s * gamma;
-        }
-    }
-    for (k, &n) in model.force_inputs.iter().enumerate() {
-        if let Some(e) = node_end[n] {
-            ws.end_force[e] += inputs.node_force[k];
-        }
-    }
-    for (n, load) in &model.loads {
-        if let Some(e) = node_end[*n] {
-            ws.end_force[e] += Vector3::from(load.force_at(t));
-        }
-    }
-    if let Some(g) = model.gravity {
-        for (i, bar) in model.bars.iter().enumerate() {
-            let w = g * (bar.mass / 2.0);
-            ws.end_force[2 * i] += w;
-            ws.end_force[2 * i + 1] += w;
-        }
-    }
-}
-
 /// Stage 3: λ in closed form and the end accelerations of every moving bar.
 pub fn bar_response(model: &Model, ws: &mut Workspace) {
-    for (i, bar) in model.bars.iter().enumerate() {
+    for i in 0..model.bars.len() {
         let (a, b) = (2 * i, 2 * i + 1);
         if model.coords.static_bar[i] {
             ws.lambda[i] = 0.0;
@@ -220,17 +176,17 @@ pub fn bar_response(model: &Model, ws: &mut Workspace) {
             ws.end_acc[b] = Vector3::zeros();
             continue;
         }
-        let m = bar.mass;
+        let inertia = &model.inertia[i];
         let bv = ws.end_pos[b] - ws.end_pos[a];
         let bdot = ws.end_vel[b] - ws.end_vel[a];
         let (fa, fb) = (ws.end_force[a], ws.end_force[b]);
-        let l2 = bv.norm_squared();
-        let lambda = (-(m / 12.0) * bdot.norm_squared() - bv.dot(&(fb - fa)) / 2.0) / l2;
+        let lambda = inertia.lambda(&bv, &bdot, &fa, &fb);
         ws.lambda[i] = lambda;
-        ws.units[i] = bv / l2.sqrt();
+        ws.units[i] = bv.normalize();
         let (ga, gb) = (fa - bv * lambda, fb + bv * lambda);
-        ws.end_acc[a] = (ga * 4.0 - gb * 2.0) / m;
-        ws.end_acc[b] = (gb * 4.0 - ga * 2.0) / m;
+        let w = &inertia.w;
+        ws.end_acc[a] = ga * w[0][0] + gb * w[0][1];
+        ws.end_acc[b] = ga * w[1][0] + gb * w[1][1];
     }
 }
 
@@ -246,7 +202,7 @@ fn add_reactions(model: &Model, ws: &mut Workspace) {
             ws.reactions.rhs[3 * c + k] = -r[k];
         }
     }
-    ws.reactions.assemble(&ws.units, &ws.masses);
+    ws.reactions.assemble(&ws.units, &model.inertia);
     if !ws.reactions.solve() {
         ws.dense_fallbacks += 1;
     }

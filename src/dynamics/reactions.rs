@@ -10,6 +10,7 @@ use nalgebra::{DMatrix, DVector, Matrix3, Vector3};
 
 use super::block_cholesky::BlockCholesky;
 use crate::model::coords::Coordinates;
+use crate::model::inertia::BarInertia;
 
 /// A constraint column touching a bar: (column, coefficient, end side 0/1).
 type Term = (usize, f64, usize);
@@ -21,8 +22,8 @@ struct Contribution {
     slot: usize,
     /// Product of the two constraint coefficients.
     coef: f64,
-    /// Both terms at the same end of the bar.
-    same_end: bool,
+    /// End sides (0 = start, 1 = end) of the two terms.
+    sides: (usize, usize),
 }
 
 /// How K is stored and solved.
@@ -87,7 +88,7 @@ impl Reactions {
                     .map(|(a, b)| Contribution {
                         slot: slot(a.0, b.0),
                         coef: a.1 * b.1,
-                        same_end: a.2 == b.2,
+                        sides: (a.2, b.2),
                     })
                     .collect()
             })
@@ -105,21 +106,31 @@ impl Reactions {
         self.n
     }
 
-    /// Assembles K for the current bar directions `u_i = b_i/|b_i|` and masses.
-    pub fn assemble(&mut self, units: &[Vector3<f64>], masses: &[f64]) {
+    /// Assembles K for the current bar directions `u_i = b_i/|b_i|` and inertias.
+    pub fn assemble(&mut self, units: &[Vector3<f64>], inertia: &[BarInertia]) {
         match &mut self.solver {
             Solver::Sparse(chol) => chol.k_values.iter_mut().for_each(|b| *b = Matrix3::zeros()),
             Solver::Dense(values) => values.iter_mut().for_each(|v| *v = 0.0),
         }
         for (bar, contributions) in self.per_bar.iter().enumerate() {
+            if contributions.is_empty() {
+                continue;
+            }
             let u = units[bar];
             let uu = u * u.transpose();
-            let inv_m = 1.0 / masses[bar];
+            let blocks = [
+                [
+                    inertia[bar].compliance(0, 0, &uu),
+                    inertia[bar].compliance(0, 1, &uu),
+                ],
+                [
+                    inertia[bar].compliance(1, 0, &uu),
+                    inertia[bar].compliance(1, 1, &uu),
+                ],
+            ];
             for c in contributions {
-                // Same end: (4I − 3uuᵀ)/m; opposite ends: (−2I + 3uuᵀ)/m.
-                let (alpha, beta) = if c.same_end { (4.0, -3.0) } else { (-2.0, 3.0) };
-                let s = c.coef * inv_m;
-                let block = (Matrix3::identity() * alpha + uu * beta) * s;
+                // A uniform rod: same end (4I − 3uuᵀ)/m, opposite ends (−2I + 3uuᵀ)/m.
+                let block = blocks[c.sides.0][c.sides.1] * c.coef;
                 match &mut self.solver {
                     Solver::Sparse(chol) => chol.k_values[c.slot] += block,
                     Solver::Dense(values) => {

@@ -1,17 +1,22 @@
 //! The immutable model built once from a validated scene: topology, masses, laws,
 //! the constraint basis, the correction plan and the reaction-system layout.
 
+pub mod contact;
 pub mod coords;
+pub mod inertia;
 pub mod prestress;
 
 use nalgebra::Vector3;
 
 use crate::correction::CorrectionPlan;
+use crate::dynamics::effects::Pipeline;
 use crate::dynamics::reactions::Reactions;
 use crate::error::SceneError;
 use crate::scene::{CableControl, LoadSpec, Scene, SolverSpec};
+use contact::Ground;
 pub use coords::BasisKind;
 use coords::Coordinates;
+use inertia::BarInertia;
 
 /// A rigid bar between physical nodes (0-based).
 #[derive(Debug, Clone, PartialEq)]
@@ -79,6 +84,14 @@ pub struct Model {
     pub gravity: Option<Vector3<f64>>,
     /// Nodes (0-based) that take force inputs, in scene order.
     pub force_inputs: Vec<usize>,
+    /// Payload per bar end, kg (zeros without point masses).
+    pub payload: Vec<f64>,
+    /// Inverse mass data per bar (rod plus payloads).
+    pub inertia: Vec<BarInertia>,
+    /// The ground plane, if the scene has one.
+    pub ground: Option<Ground>,
+    /// The force contributions of the declared effects, run by every evaluation.
+    pub pipeline: Pipeline,
     /// Scripted loads: node (0-based) and law; empty when the scene has none.
     pub loads: Vec<(usize, LoadSpec)>,
     /// Cable index of each controlled-cable input.
@@ -147,13 +160,29 @@ impl Model {
                 bar + 1
             ));
         }
+        let mut payload = vec![0.0; coords.n_ends()];
+        for pm in &scene.point_masses {
+            let end = coords.node_end[pm.node - 1].expect("validated: the node is on a bar");
+            payload[end] += pm.mass;
+        }
+        let inertia: Vec<BarInertia> = bars
+            .iter()
+            .enumerate()
+            .map(|(i, b)| BarInertia::new(b.mass, [payload[2 * i], payload[2 * i + 1]]))
+            .collect();
+        let ground = scene.ground.as_ref().map(|spec| {
+            let contacts = (0..positions.len())
+                .filter(|&n| !pinned[n])
+                .filter_map(|n| coords.node_end[n].map(|e| (n, e)))
+                .collect();
+            Ground::new(spec, contacts)
+        });
         let mut reactions = Reactions::new(&coords, bars.len(), basis == BasisKind::Dense);
         let units: Vec<Vector3<f64>> = bars
             .iter()
             .map(|b| (positions[b.nodes[1]] - positions[b.nodes[0]]) / b.length)
             .collect();
-        let masses: Vec<f64> = bars.iter().map(|b| b.mass).collect();
-        reactions.assemble(&units, &masses);
+        reactions.assemble(&units, &inertia);
         if !reactions.solve() {
             warnings.push(
                 "the joint reactions are statically indeterminate (bars form a rigid frame); \
@@ -162,13 +191,17 @@ impl Model {
             );
             reactions = Reactions::new(&coords, bars.len(), true);
         }
-        Ok(Self {
+        let mut model = Self {
             scene: scene.clone(),
             positions,
             pinned,
             bars,
             cables: built.cables,
             gravity: scene.gravity.map(Vector3::from),
+            payload,
+            inertia,
+            ground,
+            pipeline: Pipeline::default(),
             force_inputs: scene.force_inputs.iter().map(|&n| n - 1).collect(),
             loads: scene
                 .loads
@@ -184,7 +217,9 @@ impl Model {
             correction,
             reactions,
             warnings,
-        })
+        };
+        model.pipeline = Pipeline::new(&model);
+        Ok(model)
     }
 
     /// Number of physical nodes.
@@ -202,9 +237,9 @@ impl Model {
         self.bars.iter().map(|b| b.length).collect()
     }
 
-    /// Bar masses in kg.
-    pub fn masses(&self) -> Vec<f64> {
-        self.bars.iter().map(|b| b.mass).collect()
+    /// Mass lumped at bar end `e` for weight and momentum: half the rod plus its payload, kg.
+    pub fn end_mass(&self, e: usize) -> f64 {
+        self.bars[e / 2].mass / 2.0 + self.payload[e]
     }
 
     /// The scene with every derived value written out (no `prestress`): rest lengths and

@@ -104,6 +104,8 @@ pub fn tower_scene(stages: usize, stiffness: Option<f64>, name: &str) -> Scene {
         force_inputs: (0..3).map(|i| id(stages, i)).collect(),
         velocities: None,
         loads: Vec::new(),
+        point_masses: Vec::new(),
+        ground: None,
         outputs: None,
         prestress: Some(PrestressSpec {
             min_tension: PRESTRESS_TENSION,
@@ -178,6 +180,8 @@ fn icosahedron() -> Scene {
         gravity: None,
         velocities: None,
         loads: Vec::new(),
+        point_masses: Vec::new(),
+        ground: None,
         outputs: None,
         prestress: Some(PrestressSpec {
             min_tension: PRESTRESS_TENSION,

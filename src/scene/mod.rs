@@ -48,6 +48,12 @@ pub struct Scene {
     /// Scripted loads on nodes, evaluated at the integrator's stage times.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub loads: Vec<LoadSpec>,
+    /// Payloads carried by nodes (kg), added to the bar ends' inertia and weight.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub point_masses: Vec<PointMassSpec>,
+    /// A ground plane the bar ends touch; absent means none.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub ground: Option<GroundSpec>,
     /// Equilibrium prestress: derive rest lengths / start force densities from a self-stress.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub prestress: Option<PrestressSpec>,
@@ -64,6 +70,49 @@ pub struct BarSpec {
     pub nodes: [usize; 2],
     /// Mass in kg (thin uniform bar).
     pub mass: f64,
+}
+
+/// A payload rigidly attached to a node.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PointMassSpec {
+    /// Node number (1-based); it must be a free node of some bar.
+    pub node: usize,
+    /// Mass in kg.
+    pub mass: f64,
+}
+
+/// A ground plane `normal · x = height` with penalty contact and Coulomb friction.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct GroundSpec {
+    /// Plane offset along the normal, m.
+    #[serde(default)]
+    pub height: f64,
+    /// Outward normal (any length > 0); `[0, 0, 1]` by default.
+    #[serde(default = "GroundSpec::default_normal")]
+    pub normal: [f64; 3],
+    /// Penalty stiffness, N/m.
+    pub stiffness: f64,
+    /// Penalty damping on the normal approach speed, N·s/m.
+    #[serde(default)]
+    pub damping: f64,
+    /// Coulomb friction coefficient μ (0: frictionless).
+    #[serde(default)]
+    pub friction: f64,
+    /// Tangential speed below which friction is viscous (regularised Coulomb), m/s.
+    #[serde(default = "GroundSpec::default_slip_velocity")]
+    pub slip_velocity: f64,
+}
+
+impl GroundSpec {
+    fn default_normal() -> [f64; 3] {
+        [0.0, 0.0, 1.0]
+    }
+
+    fn default_slip_velocity() -> f64 {
+        1e-3
+    }
 }
 
 /// How a cable's force density is set.

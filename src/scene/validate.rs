@@ -1,6 +1,6 @@
 //! Scene validation: every rejection names the key (1-based indices) and the reason.
 
-use super::{CableControl, LoadSpec, Scene};
+use super::{CableControl, GroundSpec, LoadSpec, Scene};
 use crate::error::SceneError;
 
 /// Lengths below this fraction of the structure's size count as zero.
@@ -159,6 +159,30 @@ pub(super) fn validate(scene: &Scene) -> Result<(), SceneError> {
     if let Some(g) = &scene.gravity {
         finite_vec("gravity", g)?;
     }
+    for (k, pm) in scene.point_masses.iter().enumerate() {
+        let key = format!("point_masses[{}]", k + 1);
+        let i = node(format!("{key}.node"), pm.node)?;
+        if fixed[i] || !used[i] {
+            return Err(SceneError::invalid(
+                format!("{key}.node"),
+                format!(
+                    "node {} is {}: a payload must ride on a free bar end",
+                    i + 1,
+                    if fixed[i] { "pinned" } else { "on no bar" }
+                ),
+            ));
+        }
+        finite(&format!("{key}.mass"), pm.mass)?;
+        if pm.mass < 0.0 {
+            return Err(SceneError::invalid(
+                format!("{key}.mass"),
+                format!("must be ≥ 0, got {}", pm.mass),
+            ));
+        }
+    }
+    if let Some(ground) = &scene.ground {
+        validate_ground(ground)?;
+    }
     if let Some(vs) = &scene.velocities {
         if vs.len() != n {
             return Err(SceneError::invalid(
@@ -200,6 +224,33 @@ pub(super) fn validate(scene: &Scene) -> Result<(), SceneError> {
             "solver.rtol",
             "solver.rtol and solver.atol cannot both be 0",
         ));
+    }
+    Ok(())
+}
+
+fn validate_ground(g: &GroundSpec) -> Result<(), SceneError> {
+    finite("ground.height", g.height)?;
+    finite_vec("ground.normal", &g.normal)?;
+    if g.normal.iter().map(|x| x * x).sum::<f64>() == 0.0 {
+        return Err(SceneError::invalid(
+            "ground.normal",
+            "must not be the zero vector",
+        ));
+    }
+    for (key, v, positive) in [
+        ("ground.stiffness", g.stiffness, true),
+        ("ground.damping", g.damping, false),
+        ("ground.friction", g.friction, false),
+        ("ground.slip_velocity", g.slip_velocity, true),
+    ] {
+        finite(key, v)?;
+        if v < 0.0 || (positive && v == 0.0) {
+            let bound = if positive { "> 0" } else { "≥ 0" };
+            return Err(SceneError::invalid(
+                key,
+                format!("must be {bound}, got {v}"),
+            ));
+        }
     }
     Ok(())
 }

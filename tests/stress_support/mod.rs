@@ -202,6 +202,8 @@ pub fn bare(name: &str, nodes: Vec<[f64; 3]>, fixed: Vec<usize>) -> Scene {
         force_inputs: Vec::new(),
         velocities: None,
         loads: Vec::new(),
+        point_masses: Vec::new(),
+        ground: None,
         outputs: None,
         prestress: None,
         solver: Default::default(),
