@@ -111,7 +111,7 @@ impl GroundSpec {
     }
 
     fn default_slip_velocity() -> f64 {
-        1e-3
+        1e-2
     }
 }
 

@@ -3,10 +3,12 @@
 //! Power iteration on the position Jacobian of the constrained acceleration (by finite
 //! differences, at rest): its largest eigenvalue magnitude is ω²_max. Velocity-dependent
 //! terms (damping, centrifugal) are left out; cables' slack/taut state is the current one.
+//! Ground contact, usually inactive when the check runs, adds a bound of its own.
 
 use super::Simulation;
 use crate::dynamics;
 use crate::integrator::Method;
+use crate::model::Model;
 
 /// Largest stable `h ω` on the imaginary axis: RK4 2√2; velocity Verlet 2.
 pub fn stability_limit(method: Method) -> Option<f64> {
@@ -15,6 +17,26 @@ pub fn stability_limit(method: Method) -> Option<f64> {
         Method::Rattle => Some(2.0),
         Method::Dopri5 => None,
     }
+}
+
+/// A bound on the fastest rate of ground contact, 1/s: the damped penalty oscillator
+/// `√(k w) + c w` or the viscous friction `μ F w / v_s`, with `w` the largest end compliance
+/// and `F` the whole weight (contact is not active at rest, so the power iteration misses it).
+pub fn contact_rate(model: &Model) -> f64 {
+    let Some(ground) = &model.ground else {
+        return 0.0;
+    };
+    let w = ground
+        .nodes
+        .iter()
+        .map(|&(_, e)| model.inertia[e / 2].w[e % 2][e % 2])
+        .fold(0.0, f64::max);
+    let weight = model.gravity.map_or(0.0, |g| {
+        g.norm() * (0..model.coords.n_ends()).map(|e| model.end_mass(e)).sum::<f64>()
+    });
+    let oscillator = (ground.stiffness * w).sqrt() + ground.damping * w;
+    let friction = ground.friction * weight * w / ground.slip_velocity;
+    oscillator.max(friction)
 }
 
 impl Simulation {
@@ -106,7 +128,7 @@ impl Simulation {
         let method = self.model.solver.method;
         let limit = stability_limit(method)?;
         let h = self.model.solver.step_size;
-        let omega = self.max_frequency();
+        let omega = self.max_frequency().max(contact_rate(&self.model));
         (h * omega > limit).then(|| {
             format!(
                 "solver.step_size = {h} s is above the stability limit of {} for the fastest mode \
