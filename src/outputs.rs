@@ -23,6 +23,10 @@ pub enum Quantity {
     OrthogonalityError,
     /// Total energy, J.
     Energy,
+    /// Normal ground force on contact point `k` (`Ground::nodes` order), N.
+    ContactForce(usize),
+    /// Total ground force component along an axis, N.
+    GroundForce(usize),
 }
 
 /// One named output.
@@ -50,6 +54,7 @@ impl Quantity {
             Self::BarForce(_) => OutputGroup::BarForces,
             Self::LengthError | Self::OrthogonalityError => OutputGroup::Diagnostics,
             Self::Energy => OutputGroup::Energy,
+            Self::ContactForce(_) | Self::GroundForce(_) => OutputGroup::Contact,
         }
     }
 }
@@ -65,6 +70,8 @@ impl Quantity {
             Self::LengthError => sim.length_error(),
             Self::OrthogonalityError => sim.orthogonality_error(),
             Self::Energy => sim.energy(),
+            Self::ContactForce(k) => sim.contact_force(k),
+            Self::GroundForce(axis) => sim.ground_force()[axis],
         }
     }
 }
@@ -142,10 +149,45 @@ fn all_outputs(sim: &Simulation) -> Vec<Output> {
     out.push(Output {
         name: "energy.total".into(),
         unit: "J",
-        description: "kinetic + cable strain + gravity energy".into(),
+        description: energy_terms(model),
         quantity: Quantity::Energy,
     });
+    if let Some(ground) = &model.ground {
+        for (k, &(n, _)) in ground.nodes.iter().enumerate() {
+            out.push(Output {
+                name: format!("node[{}].contact_force", n + 1),
+                unit: "N",
+                description: format!(
+                    "normal ground force on node {} (0 when not touching)",
+                    n + 1
+                ),
+                quantity: Quantity::ContactForce(k),
+            });
+        }
+        for (k, axis) in AXES.iter().enumerate() {
+            out.push(Output {
+                name: format!("ground.force_{axis}"),
+                unit: "N",
+                description: format!(
+                    "total ground force on the structure along {axis} (normal and friction)"
+                ),
+                quantity: Quantity::GroundForce(k),
+            });
+        }
+    }
     out
+}
+
+/// What `energy.total` sums, naming only the effects the model has.
+fn energy_terms(model: &crate::model::Model) -> String {
+    let mut terms = vec!["kinetic", "cable strain"];
+    if model.gravity.is_some() {
+        terms.push("gravity");
+    }
+    if model.ground.is_some() {
+        terms.push("ground penalty");
+    }
+    format!("{} energy", terms.join(" + "))
 }
 
 /// Writes a CSV header (`time` then the output names).

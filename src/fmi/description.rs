@@ -2,7 +2,7 @@
 
 use fmi2_model_description as md;
 
-use super::variables::{BaseType, Binding, VariableTable, METHOD_TYPE, UNITS};
+use super::variables::{BaseType, Binding, GroundField, VariableTable, METHOD_TYPE, UNITS};
 use super::Category;
 use crate::integrator::Method;
 use crate::model::Model;
@@ -39,7 +39,15 @@ pub fn model_description(model: &Model, table: &VariableTable, guid: &str) -> md
                     declared_type: None,
                     unit: v.unit.map(str::to_string),
                     start: v.start,
-                    min: matches!(v.binding, Binding::Mass(_) | Binding::StepSize).then_some(0.0),
+                    min: matches!(
+                        v.binding,
+                        Binding::Mass(_)
+                            | Binding::StepSize
+                            | Binding::PointMass(_)
+                            | Binding::Ground(_)
+                    )
+                    .then_some(0.0)
+                    .filter(|_| v.binding != Binding::Ground(GroundField::Height)),
                     max: None,
                 },
                 BaseType::Boolean => md::VariableKind::Boolean {
@@ -80,8 +88,10 @@ pub fn model_description(model: &Model, table: &VariableTable, guid: &str) -> md
             can_interpolate_inputs: false,
             max_output_derivative_order: 0,
         },
+        // Only the units some variable uses: an absent effect leaves no trace.
         unit_definitions: UNITS
             .iter()
+            .filter(|(name, _)| table.variables.iter().any(|v| v.unit == Some(*name)))
             .map(|(name, [kg, m, s])| md::Unit {
                 name: name.to_string(),
                 base_unit: md::BaseUnit {

@@ -6,12 +6,12 @@
 use std::path::Path;
 
 use super::snapshot::Snapshot;
-use super::variables::{BaseType, Binding, VariableTable};
+use super::variables::{BaseType, Binding, GroundField, LoadField, VariableTable};
 use super::{guid_for, Category, Message, Mode, Status};
 use crate::dynamics::Inputs;
 use crate::integrator::Method;
 use crate::model::Model;
-use crate::scene::Scene;
+use crate::scene::{LoadSpec, Scene};
 use crate::sim::Simulation;
 
 /// A failed call: what the importer is told.
@@ -540,6 +540,23 @@ impl Core {
             Binding::RestLength(j) => core.scene.cables[j].rest_length.unwrap_or(0.0),
             Binding::Damping(j) => core.scene.cables[j].damping.unwrap_or(0.0),
             Binding::Mass(i) => core.scene.bars[i].mass,
+            Binding::Gravity(axis) => core.scene.gravity.map_or(0.0, |g| g[axis]),
+            Binding::PointMass(k) => core.scene.point_masses[k].mass,
+            Binding::Ground(field) => {
+                let g = core
+                    .scene
+                    .ground
+                    .as_ref()
+                    .expect("a ground variable has a ground");
+                match field {
+                    GroundField::Height => g.height,
+                    GroundField::Stiffness => g.stiffness,
+                    GroundField::Damping => g.damping,
+                    GroundField::Friction => g.friction,
+                    GroundField::SlipVelocity => g.slip_velocity,
+                }
+            }
+            Binding::Load(k, field) => load_field(&core.scene.loads[k], field),
         }
     }
 
@@ -576,9 +593,61 @@ pub(super) fn apply_parameter(scene: &mut Scene, binding: Binding, value: f64) {
         Binding::RestLength(j) => scene.cables[j].rest_length = Some(value),
         Binding::Damping(j) => scene.cables[j].damping = Some(value),
         Binding::Mass(i) => scene.bars[i].mass = value,
+        Binding::Gravity(axis) => {
+            if let Some(g) = &mut scene.gravity {
+                g[axis] = value;
+            }
+        }
+        Binding::PointMass(k) => scene.point_masses[k].mass = value,
+        Binding::Ground(field) => {
+            if let Some(g) = &mut scene.ground {
+                *match field {
+                    GroundField::Height => &mut g.height,
+                    GroundField::Stiffness => &mut g.stiffness,
+                    GroundField::Damping => &mut g.damping,
+                    GroundField::Friction => &mut g.friction,
+                    GroundField::SlipVelocity => &mut g.slip_velocity,
+                } = value;
+            }
+        }
+        Binding::Load(k, field) => set_load_field(&mut scene.loads[k], field, value),
         Binding::Output(_)
         | Binding::ForceDensity(_)
         | Binding::NodeForce(..)
         | Binding::ReelInput(_) => {}
+    }
+}
+
+fn load_field(load: &LoadSpec, field: LoadField) -> f64 {
+    match (load, field) {
+        (
+            LoadSpec::Constant { force, .. }
+            | LoadSpec::Step { force, .. }
+            | LoadSpec::Sinusoidal {
+                amplitude: force, ..
+            },
+            LoadField::Force(axis),
+        ) => force[axis],
+        (LoadSpec::Sinusoidal { frequency, .. }, LoadField::Frequency) => *frequency,
+        (LoadSpec::Sinusoidal { phase, .. }, LoadField::Phase) => *phase,
+        (LoadSpec::Step { time, .. }, LoadField::Time) => *time,
+        _ => unreachable!("the variable table only binds fields the load has"),
+    }
+}
+
+fn set_load_field(load: &mut LoadSpec, field: LoadField, value: f64) {
+    match (load, field) {
+        (
+            LoadSpec::Constant { force, .. }
+            | LoadSpec::Step { force, .. }
+            | LoadSpec::Sinusoidal {
+                amplitude: force, ..
+            },
+            LoadField::Force(axis),
+        ) => force[axis] = value,
+        (LoadSpec::Sinusoidal { frequency, .. }, LoadField::Frequency) => *frequency = value,
+        (LoadSpec::Sinusoidal { phase, .. }, LoadField::Phase) => *phase = value,
+        (LoadSpec::Step { time, .. }, LoadField::Time) => *time = value,
+        _ => {}
     }
 }

@@ -6,6 +6,7 @@ use fmi2_model_description::{Causality, Initial, Variability};
 
 use crate::model::{CableLaw, Model};
 use crate::outputs::{self, Quantity};
+use crate::scene::LoadSpec;
 use crate::sim::Simulation;
 
 /// What a variable reads or writes.
@@ -37,6 +38,42 @@ pub enum Binding {
     Damping(usize),
     /// Mass of bar `i`.
     Mass(usize),
+    /// Gravity component, axis 0..3.
+    Gravity(usize),
+    /// A ground-plane setting.
+    Ground(GroundField),
+    /// Mass of point mass `k`.
+    PointMass(usize),
+    /// A setting of scripted load `k`.
+    Load(usize, LoadField),
+}
+
+/// The ground-plane settings exposed as parameters.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum GroundField {
+    /// `ground.height`.
+    Height,
+    /// `ground.stiffness`.
+    Stiffness,
+    /// `ground.damping`.
+    Damping,
+    /// `ground.friction`.
+    Friction,
+    /// `ground.slip_velocity`.
+    SlipVelocity,
+}
+
+/// The scripted-load settings exposed as parameters.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum LoadField {
+    /// Force (constant, step) or amplitude (sinusoidal) along an axis 0..3.
+    Force(usize),
+    /// Sinusoid frequency.
+    Frequency,
+    /// Sinusoid phase.
+    Phase,
+    /// Step switch-on time.
+    Time,
 }
 
 /// FMI base type of a variable.
@@ -86,7 +123,7 @@ pub struct VariableTable {
 }
 
 /// Units used by the table, with their SI base-unit exponents `(kg, m, s)`.
-pub const UNITS: [(&str, [i32; 3]); 9] = [
+pub const UNITS: [(&str, [i32; 3]); 12] = [
     ("m", [0, 1, 0]),
     ("m/s", [0, 1, -1]),
     ("m2/s", [0, 2, -1]),
@@ -96,6 +133,9 @@ pub const UNITS: [(&str, [i32; 3]); 9] = [
     ("kg", [1, 0, 0]),
     ("s", [0, 0, 1]),
     ("J", [1, 2, -2]),
+    ("m/s2", [0, 1, -2]),
+    ("Hz", [0, 0, -1]),
+    ("rad", [0, 0, 0]),
 ];
 
 impl VariableTable {
@@ -104,6 +144,7 @@ impl VariableTable {
         let model = sim.model();
         let mut vars = Vec::new();
         parameters(model, &mut vars);
+        effect_parameters(model, &mut vars);
         inputs(model, &mut vars);
         for o in outputs::outputs(sim) {
             vars.push(Variable {
@@ -249,6 +290,131 @@ fn parameters(model: &Model, vars: &mut Vec<Variable>) {
         ));
     }
 }
+
+/// Parameters of the optional effects: only those the scene declares.
+fn effect_parameters(model: &Model, vars: &mut Vec<Variable>) {
+    let scene = &model.scene;
+    if let Some(g) = scene.gravity {
+        for (axis, name) in AXES.iter().enumerate() {
+            vars.push(parameter(
+                format!("gravity.{name}"),
+                Some("m/s2"),
+                format!("gravitational acceleration along {name}"),
+                g[axis],
+                Binding::Gravity(axis),
+            ));
+        }
+    }
+    for (k, pm) in scene.point_masses.iter().enumerate() {
+        vars.push(parameter(
+            format!("point_mass[{}].mass", k + 1),
+            Some("kg"),
+            format!("payload {} carried by node {}", k + 1, pm.node),
+            pm.mass,
+            Binding::PointMass(k),
+        ));
+    }
+    if let Some(ground) = &scene.ground {
+        let fields = [
+            (
+                GroundField::Height,
+                "height",
+                Some("m"),
+                "offset of the ground plane along its normal",
+                ground.height,
+            ),
+            (
+                GroundField::Stiffness,
+                "stiffness",
+                Some("N/m"),
+                "penalty stiffness of contact at bar ends",
+                ground.stiffness,
+            ),
+            (
+                GroundField::Damping,
+                "damping",
+                Some("N.s/m"),
+                "penalty damping on the normal approach speed",
+                ground.damping,
+            ),
+            (
+                GroundField::Friction,
+                "friction",
+                None,
+                "Coulomb friction coefficient",
+                ground.friction,
+            ),
+            (
+                GroundField::SlipVelocity,
+                "slip_velocity",
+                Some("m/s"),
+                "tangential speed below which friction is viscous (regularised Coulomb)",
+                ground.slip_velocity,
+            ),
+        ];
+        for (field, name, unit, description, value) in fields {
+            vars.push(parameter(
+                format!("ground.{name}"),
+                unit,
+                description.into(),
+                value,
+                Binding::Ground(field),
+            ));
+        }
+    }
+    for (k, load) in scene.loads.iter().enumerate() {
+        load_parameters(k, load, vars);
+    }
+}
+
+fn load_parameters(k: usize, load: &LoadSpec, vars: &mut Vec<Variable>) {
+    let l = k + 1;
+    let node = load.node();
+    let (force, what) = match *load {
+        LoadSpec::Constant { force, .. } => (force, "constant force"),
+        LoadSpec::Sinusoidal { amplitude, .. } => (amplitude, "amplitude of the sinusoidal force"),
+        LoadSpec::Step { force, .. } => (force, "force of the step"),
+    };
+    for (axis, name) in AXES.iter().enumerate() {
+        vars.push(parameter(
+            format!("load[{l}].f{name}"),
+            Some("N"),
+            format!("scripted load {l} on node {node}: {what} along {name}"),
+            force[axis],
+            Binding::Load(k, LoadField::Force(axis)),
+        ));
+    }
+    match *load {
+        LoadSpec::Sinusoidal {
+            frequency, phase, ..
+        } => {
+            vars.push(parameter(
+                format!("load[{l}].frequency"),
+                Some("Hz"),
+                format!("scripted load {l}: frequency of the sinusoid"),
+                frequency,
+                Binding::Load(k, LoadField::Frequency),
+            ));
+            vars.push(parameter(
+                format!("load[{l}].phase"),
+                Some("rad"),
+                format!("scripted load {l}: phase of the sinusoid"),
+                phase,
+                Binding::Load(k, LoadField::Phase),
+            ));
+        }
+        LoadSpec::Step { time, .. } => vars.push(parameter(
+            format!("load[{l}].time"),
+            Some("s"),
+            format!("scripted load {l}: switch-on time of the step"),
+            time,
+            Binding::Load(k, LoadField::Time),
+        )),
+        LoadSpec::Constant { .. } => {}
+    }
+}
+
+const AXES: [&str; 3] = ["x", "y", "z"];
 
 fn input(
     name: String,

@@ -164,6 +164,8 @@ pub enum OutputGroup {
     Diagnostics,
     /// `energy.total`.
     Energy,
+    /// `node[i].contact_force`, `ground.force_x/y/z` (scenes with a ground).
+    Contact,
 }
 
 /// A scripted load on one node (N), a function of time only.

@@ -301,7 +301,22 @@ impl Simulation {
         energy::orthogonality_error(&self.model, &self.ws)
     }
 
-    /// Kinetic + cable strain + gravity energy, J.
+    /// Normal ground force on contact point `k` (`Ground::nodes` order), N.
+    pub fn contact_force(&self, k: usize) -> f64 {
+        let normal = self
+            .model
+            .ground
+            .as_ref()
+            .map_or(Vector3::zeros(), |g| g.normal);
+        self.ws.contact_force[k].dot(&normal)
+    }
+
+    /// Total ground force on the structure, N.
+    pub fn ground_force(&self) -> Vector3<f64> {
+        self.ws.contact_force.iter().sum()
+    }
+
+    /// Kinetic + cable strain + gravity + ground penalty energy, J.
     pub fn energy(&self) -> f64 {
         energy::kinetic(&self.model, &self.ws)
             + energy::potential(&self.model, &self.inputs, &self.ws)

@@ -32,7 +32,10 @@ pub fn contact_rate(model: &Model) -> f64 {
         .map(|&(_, e)| model.inertia[e / 2].w[e % 2][e % 2])
         .fold(0.0, f64::max);
     let weight = model.gravity.map_or(0.0, |g| {
-        g.norm() * (0..model.coords.n_ends()).map(|e| model.end_mass(e)).sum::<f64>()
+        g.norm()
+            * (0..model.coords.n_ends())
+                .map(|e| model.end_mass(e))
+                .sum::<f64>()
     });
     let oscillator = (ground.stiffness * w).sqrt() + ground.damping * w;
     let friction = ground.friction * weight * w / ground.slip_velocity;
