@@ -27,6 +27,8 @@ pub enum Quantity {
     ContactForce(usize),
     /// Total ground force component along an axis, N.
     GroundForce(usize),
+    /// Support reaction (support, axis), N.
+    SupportReaction(usize, usize),
 }
 
 /// One named output.
@@ -55,6 +57,7 @@ impl Quantity {
             Self::LengthError | Self::OrthogonalityError => OutputGroup::Diagnostics,
             Self::Energy => OutputGroup::Energy,
             Self::ContactForce(_) | Self::GroundForce(_) => OutputGroup::Contact,
+            Self::SupportReaction(..) => OutputGroup::Reactions,
         }
     }
 }
@@ -72,6 +75,7 @@ impl Quantity {
             Self::Energy => sim.energy(),
             Self::ContactForce(k) => sim.contact_force(k),
             Self::GroundForce(axis) => sim.ground_force()[axis],
+            Self::SupportReaction(k, axis) => sim.support_reaction(k)[axis],
         }
     }
 }
@@ -133,6 +137,16 @@ fn all_outputs(sim: &Simulation) -> Vec<Output> {
             ),
             quantity: Quantity::BarForce(i),
         });
+    }
+    for (k, support) in model.supports.iter().enumerate() {
+        for (axis, name) in AXES.iter().enumerate() {
+            out.push(Output {
+                name: format!("node[{}].reaction_{name}", support.node + 1),
+                unit: "N",
+                description: format!("force of the pin on node {} along {name}", support.node + 1),
+                quantity: Quantity::SupportReaction(k, axis),
+            });
+        }
     }
     out.push(Output {
         name: "constraint.length_error".into(),

@@ -10,6 +10,7 @@ mod block_cholesky;
 pub mod effects;
 pub mod energy;
 pub mod reactions;
+pub mod supports;
 
 use nalgebra::Vector3;
 
@@ -74,6 +75,15 @@ pub struct Workspace {
 }
 
 impl Workspace {
+    /// Ω of constraint column `c` from the last evaluation (zero without reactions), N.
+    pub fn reaction_solution(&self, c: usize) -> Vector3<f64> {
+        let r = &self.reactions.rhs;
+        if r.len() < 3 * c + 3 {
+            return Vector3::zeros();
+        }
+        Vector3::new(r[3 * c], r[3 * c + 1], r[3 * c + 2])
+    }
+
     /// Allocates everything an evaluation needs.
     pub fn new(model: &Model) -> Self {
         let ends = model.coords.n_ends();

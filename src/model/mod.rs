@@ -11,6 +11,7 @@ use nalgebra::Vector3;
 use crate::correction::CorrectionPlan;
 use crate::dynamics::effects::Pipeline;
 use crate::dynamics::reactions::Reactions;
+use crate::dynamics::supports::Support;
 use crate::error::SceneError;
 use crate::scene::{CableControl, LoadSpec, Scene, SolverSpec};
 use contact::Ground;
@@ -90,6 +91,8 @@ pub struct Model {
     pub inertia: Vec<BarInertia>,
     /// The ground plane, if the scene has one.
     pub ground: Option<Ground>,
+    /// How to read the support reaction of each pinned node.
+    pub supports: Vec<Support>,
     /// The force contributions of the declared effects, run by every evaluation.
     pub pipeline: Pipeline,
     /// Scripted loads: node (0-based) and law; empty when the scene has none.
@@ -191,6 +194,7 @@ impl Model {
             );
             reactions = Reactions::new(&coords, bars.len(), true);
         }
+        let supports = Support::all(&coords, &pinned, &built.cables);
         let mut model = Self {
             scene: scene.clone(),
             positions,
@@ -201,6 +205,7 @@ impl Model {
             payload,
             inertia,
             ground,
+            supports,
             pipeline: Pipeline::default(),
             force_inputs: scene.force_inputs.iter().map(|&n| n - 1).collect(),
             loads: scene

@@ -166,6 +166,8 @@ pub enum OutputGroup {
     Energy,
     /// `node[i].contact_force`, `ground.force_x/y/z` (scenes with a ground).
     Contact,
+    /// `node[i].reaction_x/y/z` at pinned nodes.
+    Reactions,
 }
 
 /// A scripted load on one node (N), a function of time only.

@@ -311,6 +311,11 @@ impl Simulation {
         self.ws.contact_force[k].dot(&normal)
     }
 
+    /// Force that support `k` (`Model::supports` order) exerts on the structure, N.
+    pub fn support_reaction(&self, k: usize) -> Vector3<f64> {
+        self.model.supports[k].reaction(&self.model.cables, &self.ws)
+    }
+
     /// Total ground force on the structure, N.
     pub fn ground_force(&self) -> Vector3<f64> {
         self.ws.contact_force.iter().sum()
