@@ -1,6 +1,7 @@
 //! Command-line front end. Each subcommand is a thin layer over the library.
 
 mod bench;
+mod bench_effects;
 mod report;
 
 use std::fs::File;
@@ -75,8 +76,12 @@ enum Command {
         /// Built-in name.
         name: Option<String>,
     },
-    /// Print µs per step for towers of growing height, with the ratio to linear scaling.
+    /// Print µs per step for towers of growing height, with the ratio to linear scaling
+    /// (`bench effects`: what optional effects cost on tower20).
+    #[command(args_conflicts_with_subcommands = true)]
     Bench {
+        #[command(subcommand)]
+        what: Option<BenchCommand>,
         /// Tower heights in stages.
         #[arg(long, value_delimiter = ',', default_value = "2,20,200,2000")]
         stages: Vec<usize>,
@@ -88,6 +93,22 @@ enum Command {
     Report {
         #[command(subcommand)]
         what: report::ReportCommand,
+    },
+}
+
+/// Benchmarks beyond the default scaling one.
+#[derive(Subcommand, Debug)]
+enum BenchCommand {
+    /// µs per step of tower20 with only the base effects (elastic cables, pins, joints),
+    /// with every optional effect declared at zero, and with them active.
+    Effects {
+        /// Minimum wall time per measurement, s.
+        #[arg(long, default_value_t = 0.1)]
+        seconds: f64,
+        /// Measurements per case, interleaved; the best is printed (many short ones see
+        /// through this machine's slow spells better than a few long ones).
+        #[arg(long, default_value_t = 20)]
+        repeats: usize,
     },
 }
 
@@ -135,7 +156,15 @@ pub fn run(cli: Cli) -> Result<(), String> {
             print!("{}", s.to_toml_string());
             Ok(())
         }
-        Command::Bench { stages, seconds } => bench::scaling(&stages, seconds),
+        Command::Bench {
+            what: Some(BenchCommand::Effects { seconds, repeats }),
+            ..
+        } => bench_effects::run(seconds, repeats),
+        Command::Bench {
+            what: None,
+            stages,
+            seconds,
+        } => bench::scaling(&stages, seconds),
         Command::Report { what } => report::run(what),
         Command::Golden { dir } => {
             for name in scene::builtin_names() {
