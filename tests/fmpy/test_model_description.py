@@ -87,6 +87,9 @@ def expected_variables(scene):
     for i in scene.get("force_inputs", []):
         for c in "xyz":
             out[f"node[{i}].f{c}"] = ("input", "N")
+    for i in scene.get("fixed", []):
+        for c in "xyz":
+            out[f"node[{i}].reaction_{c}"] = ("output", "N")
     out["constraint.length_error"] = ("output", "m")
     out["constraint.orthogonality_error"] = ("output", "m2/s")
     out["energy.total"] = ("output", "J")
