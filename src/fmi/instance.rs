@@ -11,7 +11,7 @@ use super::{guid_for, Category, Message, Mode, Status};
 use crate::dynamics::Inputs;
 use crate::integrator::Method;
 use crate::model::Model;
-use crate::scene::{LoadSpec, Scene};
+use crate::scene::{GroundSpec, LoadSpec, Scene};
 use crate::sim::Simulation;
 
 /// A failed call: what the importer is told.
@@ -542,21 +542,15 @@ impl Core {
             Binding::Mass(i) => core.scene.bars[i].mass,
             Binding::Gravity(axis) => core.scene.gravity.map_or(0.0, |g| g[axis]),
             Binding::PointMass(k) => core.scene.point_masses[k].mass,
-            Binding::Ground(field) => {
-                let g = core
-                    .scene
-                    .ground
-                    .as_ref()
-                    .expect("a ground variable has a ground");
-                match field {
-                    GroundField::Height => g.height,
-                    GroundField::Stiffness => g.stiffness,
-                    GroundField::Damping => g.damping,
-                    GroundField::Friction => g.friction,
-                    GroundField::SlipVelocity => g.slip_velocity,
-                }
+            // Read through the same accessors as writes, on a copy.
+            Binding::Ground(field) => core
+                .scene
+                .ground
+                .clone()
+                .map_or(0.0, |mut g| *ground_field(&mut g, field)),
+            Binding::Load(k, field) => {
+                load_field(&mut core.scene.loads[k].clone(), field).map_or(0.0, |v| *v)
             }
-            Binding::Load(k, field) => load_field(&core.scene.loads[k], field),
         }
     }
 
@@ -601,16 +595,14 @@ pub(super) fn apply_parameter(scene: &mut Scene, binding: Binding, value: f64) {
         Binding::PointMass(k) => scene.point_masses[k].mass = value,
         Binding::Ground(field) => {
             if let Some(g) = &mut scene.ground {
-                *match field {
-                    GroundField::Height => &mut g.height,
-                    GroundField::Stiffness => &mut g.stiffness,
-                    GroundField::Damping => &mut g.damping,
-                    GroundField::Friction => &mut g.friction,
-                    GroundField::SlipVelocity => &mut g.slip_velocity,
-                } = value;
+                *ground_field(g, field) = value;
             }
         }
-        Binding::Load(k, field) => set_load_field(&mut scene.loads[k], field, value),
+        Binding::Load(k, field) => {
+            if let Some(v) = load_field(&mut scene.loads[k], field) {
+                *v = value;
+            }
+        }
         Binding::Output(_)
         | Binding::ForceDensity(_)
         | Binding::NodeForce(..)
@@ -618,7 +610,8 @@ pub(super) fn apply_parameter(scene: &mut Scene, binding: Binding, value: f64) {
     }
 }
 
-fn load_field(load: &LoadSpec, field: LoadField) -> f64 {
+/// The scene value behind a load parameter (`None` for a field the load lacks).
+fn load_field(load: &mut LoadSpec, field: LoadField) -> Option<&mut f64> {
     match (load, field) {
         (
             LoadSpec::Constant { force, .. }
@@ -627,27 +620,21 @@ fn load_field(load: &LoadSpec, field: LoadField) -> f64 {
                 amplitude: force, ..
             },
             LoadField::Force(axis),
-        ) => force[axis],
-        (LoadSpec::Sinusoidal { frequency, .. }, LoadField::Frequency) => *frequency,
-        (LoadSpec::Sinusoidal { phase, .. }, LoadField::Phase) => *phase,
-        (LoadSpec::Step { time, .. }, LoadField::Time) => *time,
-        _ => unreachable!("the variable table only binds fields the load has"),
+        ) => Some(&mut force[axis]),
+        (LoadSpec::Sinusoidal { frequency, .. }, LoadField::Frequency) => Some(frequency),
+        (LoadSpec::Sinusoidal { phase, .. }, LoadField::Phase) => Some(phase),
+        (LoadSpec::Step { time, .. }, LoadField::Time) => Some(time),
+        _ => None,
     }
 }
 
-fn set_load_field(load: &mut LoadSpec, field: LoadField, value: f64) {
-    match (load, field) {
-        (
-            LoadSpec::Constant { force, .. }
-            | LoadSpec::Step { force, .. }
-            | LoadSpec::Sinusoidal {
-                amplitude: force, ..
-            },
-            LoadField::Force(axis),
-        ) => force[axis] = value,
-        (LoadSpec::Sinusoidal { frequency, .. }, LoadField::Frequency) => *frequency = value,
-        (LoadSpec::Sinusoidal { phase, .. }, LoadField::Phase) => *phase = value,
-        (LoadSpec::Step { time, .. }, LoadField::Time) => *time = value,
-        _ => {}
+/// The scene value behind a ground parameter.
+fn ground_field(g: &mut GroundSpec, field: GroundField) -> &mut f64 {
+    match field {
+        GroundField::Height => &mut g.height,
+        GroundField::Stiffness => &mut g.stiffness,
+        GroundField::Damping => &mut g.damping,
+        GroundField::Friction => &mut g.friction,
+        GroundField::SlipVelocity => &mut g.slip_velocity,
     }
 }
