@@ -12,15 +12,15 @@
 //! Scenes are written as JSON text and parsed by `Scene::from_json_str`, so the scene key
 //! `point_masses` itself is exercised. Figures are printed (run with `--nocapture`).
 
-use nalgebra::{DMatrix, DVector, Vector3};
+mod kkt_support;
+
+use kkt_support::{compare_with_kkt, kkt_solve, random_scene, H};
+use nalgebra::Vector3;
 use serde_json::{json, Value};
 use std::f64::consts::PI;
-use tensegrity_fmu::dynamics::Inputs;
 use tensegrity_fmu::model::CableLaw;
 use tensegrity_fmu::scene::{builtin, PointMassSpec};
 use tensegrity_fmu::{Model, Scene, SceneError, Simulation};
-
-const H: f64 = 1e-3;
 
 fn scene_from(v: &Value) -> Scene {
     Scene::from_json_str(&v.to_string()).expect("the test scene parses")
@@ -278,308 +278,48 @@ fn cable_held_bar_frequencies_match_linearization_with_payloads() {
 // 2. Dense KKT solve with payloads
 // ---------------------------------------------------------------------------------------
 
-/// Deterministic linear congruential generator (Knuth's MMIX constants).
-struct Lcg(u64);
-
-impl Lcg {
-    fn unit(&mut self) -> f64 {
-        self.0 = self
-            .0
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        (self.0 >> 11) as f64 / (1u64 << 53) as f64
-    }
-    fn range(&mut self, lo: f64, hi: f64) -> f64 {
-        lo + (hi - lo) * self.unit()
-    }
-    fn vec3(&mut self, scale: f64) -> Vector3<f64> {
-        Vector3::new(
-            self.range(-scale, scale),
-            self.range(-scale, scale),
-            self.range(-scale, scale),
-        )
-    }
+/// The class-k structure of tests/kkt.rs (see `kkt_support::random_scene`: a class-4 hub at
+/// node 1, a pinned class-2 joint at node 2, a free class-2 joint at node 3, force inputs on
+/// nodes 10 and 8), sent through JSON text like this file's other scenes.
+fn random_scene_json(seed: u64) -> Scene {
+    scene_from(&serde_json::to_value(random_scene(seed)).expect("the scene serializes"))
 }
 
-/// The class-k structure of tests/kkt.rs: a tree of 8 bars with a class-4 hub (node 1), a
-/// pinned class-2 joint (node 2), a free class-2 joint (node 3), a pinned leaf (node 7) and
-/// a pinned bar-less cable anchor (node 9); elastic cables far from equilibrium (half of
-/// them damped), one controlled cable, gravity, force inputs on nodes 10 and 8, and start
-/// velocities that the library projects onto the constraints.
-fn random_scene(seed: u64) -> Scene {
-    let mut rng = Lcg(seed);
-    let base = [
-        [0.0, 0.0, 1.0],
-        [1.0, 0.0, 1.0],
-        [-0.6, 0.8, 1.1],
-        [-0.5, -0.8, 0.9],
-        [1.6, 0.7, 1.3],
-        [-1.4, 1.2, 0.8],
-        [-2.0, 0.6, 0.2],
-        [-0.9, -1.6, 0.5],
-        [0.0, 0.0, 0.0],
-        [0.1, 0.2, 2.0],
-    ];
-    let nodes: Vec<[f64; 3]> = base
-        .iter()
-        .map(|p| {
-            let d = rng.vec3(0.1);
-            [p[0] + d[0], p[1] + d[1], p[2] + d[2]]
-        })
-        .collect();
-    let dist = |a: usize, b: usize| (Vector3::from(nodes[b]) - Vector3::from(nodes[a])).norm();
-    // 0-based pairs; scenes are 1-based.
-    let bar_pairs = [
-        (0, 1),
-        (0, 2),
-        (0, 3),
-        (0, 9),
-        (1, 4),
-        (2, 5),
-        (5, 6),
-        (3, 7),
-    ];
-    let bars: Vec<Value> = bar_pairs
-        .iter()
-        .map(|&(a, b)| json!({ "nodes": [a + 1, b + 1], "mass": rng.range(0.5, 2.0) }))
-        .collect();
-    let cable_pairs = [
-        (8, 0),
-        (8, 3),
-        (8, 2),
-        (9, 4),
-        (9, 2),
-        (9, 3),
-        (4, 0),
-        (7, 8),
-        (5, 8),
-        (3, 2),
-        (4, 8),
-        (9, 5),
-    ];
-    let mut cables: Vec<Value> = cable_pairs
-        .iter()
-        .enumerate()
-        .map(|(j, &(a, b))| {
-            let mut c = json!({
-                "nodes": [a + 1, b + 1],
-                "stiffness": rng.range(100.0, 600.0),
-                "rest_length": dist(a, b) * rng.range(0.6, 0.8),
-            });
-            if j % 2 == 0 {
-                c["damping"] = json!(rng.range(0.5, 5.0));
-            }
-            c
-        })
-        .collect();
-    cables.push(json!({ "nodes": [8, 1], "control": "force_density", "force_density": 40.0 }));
-    let velocities: Vec<[f64; 3]> = (0..nodes.len())
-        .map(|_| {
-            let v = rng.vec3(0.5);
-            [v[0], v[1], v[2]]
-        })
-        .collect();
-    scene_from(&json!({
-        "name": "random-class-k",
-        "nodes": nodes,
-        "fixed": [2, 7, 9],
-        "bars": bars,
-        "cables": cables,
-        "gravity": [0.0, 0.0, -9.81],
-        "force_inputs": [10, 8],
-        "velocities": velocities,
-    }))
-}
-
-/// Sets perturbed cable force densities and nodal loads.
-fn set_loads(sim: &mut Simulation, rng: &mut Lcg) {
-    for g in sim.inputs.force_density.iter_mut() {
-        *g *= rng.range(0.6, 1.4);
-    }
-    for f in sim.inputs.node_force.iter_mut() {
-        *f = rng.vec3(8.0);
-    }
-}
-
-/// Cable force density from the law in dynamics.md, computed independently of the library.
-fn gamma(law: &CableLaw, inputs: &Inputs, s: &Vector3<f64>, sd: &Vector3<f64>) -> f64 {
-    let (stiffness, rest_length, damping) = match *law {
-        CableLaw::Controlled { input } => return inputs.force_density[input].max(0.0),
-        CableLaw::Elastic {
-            stiffness,
-            rest_length,
-            damping,
-        } => (stiffness, rest_length, damping),
-        CableLaw::RestLengthControlled {
-            stiffness,
-            damping,
-            input,
-        } => (stiffness, inputs.rest_length[input].max(0.0), damping),
-    };
-    let l = s.norm();
-    if l > rest_length {
-        let g = stiffness * (1.0 - rest_length / l) + damping.unwrap_or(0.0) * s.dot(sd) / (l * l);
-        g.max(0.0)
-    } else {
-        0.0
-    }
-}
-
-/// Dense saddle-point solve in physical node coordinates at the simulation's current state:
-/// `[M −Gᵀ; G 0] [ä; λ] = [F; −|ḃ|²]`. M is assembled from every bar's `m [1/3 1/6; 1/6 1/3]`
-/// on its two nodes plus `payload[n]` on node n's diagonal; a class-k joint is one node, so
-/// its payload is counted once whatever the number of bars. F holds cable forces, node
-/// inputs and the weights `m g / 2` per bar end plus `payload[n] g` per node. Row `i` of G
-/// holds `−bᵢᵀ` / `+bᵢᵀ` at the start / end node (compression positive).
-/// Returns per-node accelerations (zero at pins) and λ per bar.
-fn kkt_solve(sim: &Simulation, payload: &[f64]) -> (Vec<Vector3<f64>>, Vec<f64>) {
-    let model = sim.model();
-    let n_nodes = model.n_nodes();
-    let mut index = vec![None; n_nodes];
-    let mut n_free = 0;
-    for (n, slot) in index.iter_mut().enumerate() {
-        if !model.pinned[n] {
-            *slot = Some(n_free);
-            n_free += 1;
-        }
-    }
-    let x: Vec<_> = (0..n_nodes).map(|n| sim.node_position(n)).collect();
-    let v: Vec<_> = (0..n_nodes).map(|n| sim.node_velocity(n)).collect();
-    let nb = model.bars.len();
-    let dim = 3 * n_free + nb;
-    let mut a = DMatrix::<f64>::zeros(dim, dim);
-    let mut rhs = DVector::<f64>::zeros(dim);
-    let mut force = vec![Vector3::zeros(); n_nodes];
-    for cable in &model.cables {
-        let [p, q] = cable.nodes;
-        let s = x[q] - x[p];
-        let g = gamma(&cable.law, &sim.inputs, &s, &(v[q] - v[p]));
-        force[p] += s * g;
-        force[q] -= s * g;
-    }
-    for (k, &n) in model.force_inputs.iter().enumerate() {
-        force[n] += sim.inputs.node_force[k];
-    }
-    for n in 0..n_nodes {
-        if let Some(g) = model.gravity {
-            force[n] += g * payload[n];
-        }
-        if let Some(i) = index[n] {
-            for k in 0..3 {
-                a[(3 * i + k, 3 * i + k)] += payload[n];
-            }
-        }
-    }
-    for (i, bar) in model.bars.iter().enumerate() {
-        let [p, q] = bar.nodes;
-        if let Some(g) = model.gravity {
-            force[p] += g * (bar.mass / 2.0);
-            force[q] += g * (bar.mass / 2.0);
-        }
-        let m = bar.mass;
-        let block = [[m / 3.0, m / 6.0], [m / 6.0, m / 3.0]];
-        let ends = [p, q];
-        let b = x[q] - x[p];
-        let bd = v[q] - v[p];
-        let row = 3 * n_free + i;
-        for (r, &nr) in ends.iter().enumerate() {
-            let Some(ir) = index[nr] else { continue };
-            for (c, &nc) in ends.iter().enumerate() {
-                let Some(ic) = index[nc] else { continue };
-                for k in 0..3 {
-                    a[(3 * ir + k, 3 * ic + k)] += block[r][c];
-                }
-            }
-            let sign = if r == 0 { -1.0 } else { 1.0 };
-            for k in 0..3 {
-                a[(row, 3 * ir + k)] = sign * b[k];
-                a[(3 * ir + k, row)] = -sign * b[k];
-            }
-        }
-        rhs[row] = -bd.norm_squared();
-    }
-    for n in 0..n_nodes {
-        if let Some(i) = index[n] {
-            for k in 0..3 {
-                rhs[3 * i + k] = force[n][k];
-            }
-        }
-    }
-    let sol = a.lu().solve(&rhs).expect("the KKT matrix is non-singular");
-    let acc = (0..n_nodes)
-        .map(|n| index[n].map_or(Vector3::zeros(), |i| sol.fixed_rows::<3>(3 * i).into()))
-        .collect();
-    let lambda = (0..nb).map(|i| sol[3 * n_free + i]).collect();
-    (acc, lambda)
-}
-
-/// Runs a loaded simulation with payloads and compares every bar end's acceleration
-/// (through `dynamics::accelerations`, which `refresh` runs) and every bar force with the
-/// dense solve; also checks that the same solve without the payloads is far off, so the
+/// Runs a loaded simulation with payloads and compares every bar end's acceleration (through
+/// `dynamics::accelerations`, which `refresh` runs) and every bar force with the dense
+/// solve; also checks that the same solve without the payloads is far off, so the
 /// comparison does see them.
 fn check_against_kkt(mut scene: Scene, list: &[(usize, f64)], seed: u64) {
     scene.point_masses = payloads(list);
-    let name = scene.name.clone();
     let payload = node_payload(&scene);
-    let mut rng = Lcg(seed);
-    let mut sim = Simulation::new(Model::new(&scene).expect("scene builds"));
-    set_loads(&mut sim, &mut rng);
-    sim.advance(300, H).expect("steps");
-    set_loads(&mut sim, &mut rng);
-    sim.refresh();
-    let (acc, lambda) = kkt_solve(&sim, &payload);
-    let (acc_bare, _) = kkt_solve(&sim, &vec![0.0; payload.len()]);
-    let model = sim.model();
-    let ws = sim.workspace();
-    let scale = acc.iter().map(|a| a.norm()).fold(0.0, f64::max);
-    let speed = (0..model.n_nodes())
-        .map(|n| sim.node_velocity(n).norm())
-        .fold(0.0, f64::max);
-    assert!(scale > 1.0 && speed > 0.05, "{name}: state is not generic");
-    let mut err_acc = 0.0f64;
-    // Every bar end, not just the representative end of each node: the payload sits on
-    // one end of a joint, the others must still follow the node.
-    for (e, &n) in model.coords.end_node.iter().enumerate() {
-        err_acc = err_acc.max((ws.end_acc[e] - acc[n]).norm());
-    }
-    for (n, a) in acc.iter().enumerate() {
-        err_acc = err_acc.max((sim.node_acceleration(n) - a).norm());
-    }
-    let payload_effect = acc
+    // Every bar end is compared, not just the representative end of each node: the payload
+    // sits on one end of a joint, the others must still follow the node.
+    let c = compare_with_kkt(&scene, &payload, seed);
+    let (name, scale) = (&c.name, c.scale);
+    let acc_bare = kkt_solve(&c.sim, &vec![0.0; payload.len()]).acc;
+    let payload_effect = c
+        .kkt
+        .acc
         .iter()
         .zip(&acc_bare)
         .map(|(a, b)| (a - b).norm())
         .fold(0.0, f64::max);
-    let forces: Vec<f64> = (0..model.bars.len()).map(|i| sim.bar_force(i)).collect();
-    let kkt_forces: Vec<f64> = model
-        .bars
-        .iter()
-        .zip(&lambda)
-        .map(|(b, l)| l * b.length)
-        .collect();
-    let force_scale = kkt_forces.iter().fold(0.0f64, |m, f| m.max(f.abs()));
-    let err_force = forces
-        .iter()
-        .zip(&kkt_forces)
-        .fold(0.0f64, |m, (f, g)| m.max((f - g).abs()));
     println!(
-        "{name} with payloads {list:?}: max |Δä| = {err_acc:.3e} (scale {scale:.3e}, rel \
-         {:.3e}); max |Δ bar force| = {err_force:.3e} N (scale {force_scale:.3e}, rel \
-         {:.3e}); ignoring the payloads would change ä by {payload_effect:.3e} (rel {:.3e})",
-        err_acc / scale,
-        err_force / force_scale,
+        "{name} with payloads {list:?}: max |Δä| = {:.3e} (scale {scale:.3e}, rel {:.3e}); \
+         max |Δ bar force| = {:.3e} N (scale {:.3e}, rel {:.3e}); ignoring the payloads \
+         would change ä by {payload_effect:.3e} (rel {:.3e})",
+        c.err_acc,
+        c.err_acc / scale,
+        c.err_force,
+        c.force_scale,
+        c.err_force / c.force_scale,
         payload_effect / scale
     );
     // Both sides solve the same linear mechanics in double precision; tests/kkt.rs measures
     // ≤ 2e-15 relative without payloads and the payload only changes diagonal entries
     // (its condition stays moderate: masses 0.3–3 kg, lengths ~1 m). 1e-12 leaves
     // ~100× margin for the dense LU's condition-number growth.
-    assert!(err_acc <= 1e-12 * scale, "{name}: accelerations disagree");
-    assert!(force_scale > 1e-3, "{name}: bars carry no force");
-    assert!(
-        err_force <= 1e-12 * force_scale,
-        "{name}: bar forces disagree"
-    );
+    c.assert_agree(1e-12);
     // The payloads are comparable to the bar masses, so dropping them must change the
     // accelerations at the scale of the motion: 1e-2 is 1e10 times the tolerance.
     assert!(
@@ -593,7 +333,7 @@ fn accelerations_with_payloads_match_dense_kkt() {
     // Node 1: class-4 hub; node 3: free class-2 joint; node 5: end of bar 2–5 whose other
     // end (node 2) is pinned; nodes 8 and 10: leaves with force inputs.
     check_against_kkt(
-        random_scene(2024),
+        random_scene_json(2024),
         &[(1, 1.5), (3, 0.4), (5, 2.0), (8, 0.3), (10, 3.0)],
         13,
     );
