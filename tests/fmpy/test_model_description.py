@@ -10,6 +10,7 @@ from fmpy import read_model_description
 from fmpy.validation import validate_fmu
 
 from conftest import BUILTINS
+from effects_scenes import expected_variables
 
 # A class-3 joint (node 4 is shared by three bars), mixing elastic cables (one damped, one
 # not) with a force-density controlled cable whose start value the scene gives.
@@ -62,43 +63,6 @@ UNITS = {
     "s": (0, 0, 1),
     "J": (1, 2, -2),
 }
-
-
-def expected_variables(scene):
-    """name -> (causality, unit) for every variable issue 3 asks for, from the scene alone."""
-    out = {}
-    n_nodes = len(scene["nodes"])
-    for i in range(1, n_nodes + 1):
-        for c in "xyz":
-            out[f"node[{i}].{c}"] = ("output", "m")
-            out[f"node[{i}].v{c}"] = ("output", "m/s")
-    for j, cable in enumerate(scene.get("cables", []), start=1):
-        out[f"cable[{j}].tension"] = ("output", "N")
-        if cable.get("control") == "force_density":
-            out[f"cable[{j}].force_density"] = ("input", "N/m")
-        else:
-            out[f"cable[{j}].stiffness"] = ("parameter", "N/m")
-            out[f"cable[{j}].rest_length"] = ("parameter", "m")
-            if "damping" in cable:
-                out[f"cable[{j}].damping"] = ("parameter", "N.s/m")
-    for k in range(1, len(scene["bars"]) + 1):
-        out[f"bar[{k}].force"] = ("output", "N")
-        out[f"bar[{k}].mass"] = ("parameter", "kg")
-    for i in scene.get("force_inputs", []):
-        for c in "xyz":
-            out[f"node[{i}].f{c}"] = ("input", "N")
-    for i in scene.get("fixed", []):
-        for c in "xyz":
-            out[f"node[{i}].reaction_{c}"] = ("output", "N")
-    out["constraint.length_error"] = ("output", "m")
-    out["constraint.orthogonality_error"] = ("output", "m2/s")
-    out["energy.total"] = ("output", "J")
-    out["solver.step_size"] = ("parameter", "s")
-    out["solver.correction"] = ("parameter", None)
-    out["solver.method"] = ("parameter", None)
-    out["solver.rtol"] = ("parameter", None)
-    out["solver.atol"] = ("parameter", None)
-    return out
 
 
 @pytest.fixture(params=BUILTINS)
