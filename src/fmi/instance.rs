@@ -5,13 +5,14 @@
 
 use std::path::Path;
 
+use super::parameters::{apply_parameter, read_parameter};
 use super::snapshot::Snapshot;
-use super::variables::{BaseType, Binding, GroundField, LoadField, VariableTable};
+use super::variables::{BaseType, Binding, VariableTable};
 use super::{guid_for, Category, Message, Mode, Status};
 use crate::dynamics::Inputs;
 use crate::integrator::Method;
 use crate::model::Model;
-use crate::scene::{GroundSpec, LoadSpec, Scene};
+use crate::scene::Scene;
 use crate::sim::Simulation;
 
 /// A failed call: what the importer is told.
@@ -531,26 +532,7 @@ impl Core {
             Binding::ForceDensity(k) => sim.inputs.force_density[k],
             Binding::NodeForce(k, axis) => sim.inputs.node_force[k][axis],
             Binding::ReelInput(k) => sim.inputs.rest_length[k],
-            Binding::StepSize => core.scene.solver.step_size,
-            Binding::Correction => f64::from(u8::from(core.scene.solver.correction)),
-            Binding::Method => f64::from(core.scene.solver.method.fmi_value()),
-            Binding::Rtol => core.scene.solver.rtol,
-            Binding::Atol => core.scene.solver.atol,
-            Binding::Stiffness(j) => core.scene.cables[j].stiffness.unwrap_or(0.0),
-            Binding::RestLength(j) => core.scene.cables[j].rest_length.unwrap_or(0.0),
-            Binding::Damping(j) => core.scene.cables[j].damping.unwrap_or(0.0),
-            Binding::Mass(i) => core.scene.bars[i].mass,
-            Binding::Gravity(axis) => core.scene.gravity.map_or(0.0, |g| g[axis]),
-            Binding::PointMass(k) => core.scene.point_masses[k].mass,
-            // Read through the same accessors as writes, on a copy.
-            Binding::Ground(field) => core
-                .scene
-                .ground
-                .clone()
-                .map_or(0.0, |mut g| *ground_field(&mut g, field)),
-            Binding::Load(k, field) => {
-                load_field(&mut core.scene.loads[k].clone(), field).map_or(0.0, |v| *v)
-            }
+            parameter => read_parameter(&core.scene, parameter),
         }
     }
 
@@ -569,72 +551,5 @@ impl Core {
         self.warned_negative = next.warned_negative;
         self.rebuild = next.rebuild;
         self.stale = true;
-    }
-}
-
-pub(super) fn apply_parameter(scene: &mut Scene, binding: Binding, value: f64) {
-    match binding {
-        Binding::StepSize => scene.solver.step_size = value,
-        Binding::Correction => scene.solver.correction = value != 0.0,
-        Binding::Method => {
-            if let Some(m) = Method::from_fmi_value(value) {
-                scene.solver.method = m;
-            }
-        }
-        Binding::Rtol => scene.solver.rtol = value,
-        Binding::Atol => scene.solver.atol = value,
-        Binding::Stiffness(j) => scene.cables[j].stiffness = Some(value),
-        Binding::RestLength(j) => scene.cables[j].rest_length = Some(value),
-        Binding::Damping(j) => scene.cables[j].damping = Some(value),
-        Binding::Mass(i) => scene.bars[i].mass = value,
-        Binding::Gravity(axis) => {
-            if let Some(g) = &mut scene.gravity {
-                g[axis] = value;
-            }
-        }
-        Binding::PointMass(k) => scene.point_masses[k].mass = value,
-        Binding::Ground(field) => {
-            if let Some(g) = &mut scene.ground {
-                *ground_field(g, field) = value;
-            }
-        }
-        Binding::Load(k, field) => {
-            if let Some(v) = load_field(&mut scene.loads[k], field) {
-                *v = value;
-            }
-        }
-        Binding::Output(_)
-        | Binding::ForceDensity(_)
-        | Binding::NodeForce(..)
-        | Binding::ReelInput(_) => {}
-    }
-}
-
-/// The scene value behind a load parameter (`None` for a field the load lacks).
-fn load_field(load: &mut LoadSpec, field: LoadField) -> Option<&mut f64> {
-    match (load, field) {
-        (
-            LoadSpec::Constant { force, .. }
-            | LoadSpec::Step { force, .. }
-            | LoadSpec::Sinusoidal {
-                amplitude: force, ..
-            },
-            LoadField::Force(axis),
-        ) => Some(&mut force[axis]),
-        (LoadSpec::Sinusoidal { frequency, .. }, LoadField::Frequency) => Some(frequency),
-        (LoadSpec::Sinusoidal { phase, .. }, LoadField::Phase) => Some(phase),
-        (LoadSpec::Step { time, .. }, LoadField::Time) => Some(time),
-        _ => None,
-    }
-}
-
-/// The scene value behind a ground parameter.
-fn ground_field(g: &mut GroundSpec, field: GroundField) -> &mut f64 {
-    match field {
-        GroundField::Height => &mut g.height,
-        GroundField::Stiffness => &mut g.stiffness,
-        GroundField::Damping => &mut g.damping,
-        GroundField::Friction => &mut g.friction,
-        GroundField::SlipVelocity => &mut g.slip_velocity,
     }
 }

@@ -6,6 +6,7 @@ pub mod description;
 pub mod documentation;
 pub mod instance;
 pub mod package;
+mod parameters;
 pub mod snapshot;
 pub mod variables;
 

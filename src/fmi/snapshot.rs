@@ -6,7 +6,8 @@
 use nalgebra::Vector3;
 use sha2::{Digest, Sha256};
 
-use super::instance::{apply_parameter, Core};
+use super::instance::Core;
+use super::parameters::apply_parameter;
 use super::variables::Binding;
 use super::Mode;
 use crate::model::Model;

@@ -438,29 +438,35 @@ fn input(
 }
 
 fn inputs(model: &Model, vars: &mut Vec<Variable>) {
-    for (k, &j) in model.controlled.iter().enumerate() {
-        vars.push(input(
-            format!("cable[{}].force_density", j + 1),
+    let cable_inputs = [
+        (
+            &model.controlled,
+            &model.controlled_start,
+            "force_density",
             "N/m",
-            format!(
-                "commanded force density of cable {} (tension / length; negative values act as 0)",
-                j + 1
-            ),
-            model.controlled_start[k],
-            Binding::ForceDensity(k),
-        ));
-    }
-    for (k, &j) in model.reeled.iter().enumerate() {
-        vars.push(input(
-            format!("cable[{}].rest_length", j + 1),
+            "commanded force density of cable {j} (tension / length; negative values act as 0)",
+            Binding::ForceDensity as fn(usize) -> Binding,
+        ),
+        (
+            &model.reeled,
+            &model.reeled_start,
+            "rest_length",
             "m",
-            format!(
-                "commanded rest length of cable {} (reeled by a motor; negative values act as 0)",
-                j + 1
-            ),
-            model.reeled_start[k],
-            Binding::ReelInput(k),
-        ));
+            "commanded rest length of cable {j} (reeled by a motor; negative values act as 0)",
+            Binding::ReelInput,
+        ),
+    ];
+    for (cables, starts, key, unit, text, binding) in cable_inputs {
+        for (k, (&j, &start)) in cables.iter().zip(starts).enumerate() {
+            let j = (j + 1).to_string();
+            vars.push(input(
+                format!("cable[{j}].{key}"),
+                unit,
+                text.replace("{j}", &j),
+                start,
+                binding(k),
+            ));
+        }
     }
     for (k, &n) in model.force_inputs.iter().enumerate() {
         for (axis, name) in ["fx", "fy", "fz"].iter().enumerate() {

@@ -1,0 +1,102 @@
+//! Parameters live in the scene: these accessors read and write the scene value behind a
+//! parameter binding, so get, set and FMU-state restore share one mapping.
+
+use super::variables::{Binding, GroundField, LoadField};
+use crate::integrator::Method;
+use crate::scene::{GroundSpec, LoadSpec, Scene};
+
+/// The scene value behind a parameter binding (0 for a non-parameter binding).
+pub(super) fn read_parameter(scene: &Scene, binding: Binding) -> f64 {
+    match binding {
+        Binding::StepSize => scene.solver.step_size,
+        Binding::Correction => f64::from(u8::from(scene.solver.correction)),
+        Binding::Method => f64::from(scene.solver.method.fmi_value()),
+        Binding::Rtol => scene.solver.rtol,
+        Binding::Atol => scene.solver.atol,
+        Binding::Stiffness(j) => scene.cables[j].stiffness.unwrap_or(0.0),
+        Binding::RestLength(j) => scene.cables[j].rest_length.unwrap_or(0.0),
+        Binding::Damping(j) => scene.cables[j].damping.unwrap_or(0.0),
+        Binding::Mass(i) => scene.bars[i].mass,
+        Binding::Gravity(axis) => scene.gravity.map_or(0.0, |g| g[axis]),
+        Binding::PointMass(k) => scene.point_masses[k].mass,
+        // Read through the same accessors as writes, on a copy.
+        Binding::Ground(field) => scene
+            .ground
+            .clone()
+            .map_or(0.0, |mut g| *ground_field(&mut g, field)),
+        Binding::Load(k, field) => {
+            load_field(&mut scene.loads[k].clone(), field).map_or(0.0, |v| *v)
+        }
+        Binding::Output(_)
+        | Binding::ForceDensity(_)
+        | Binding::NodeForce(..)
+        | Binding::ReelInput(_) => 0.0,
+    }
+}
+
+pub(super) fn apply_parameter(scene: &mut Scene, binding: Binding, value: f64) {
+    match binding {
+        Binding::StepSize => scene.solver.step_size = value,
+        Binding::Correction => scene.solver.correction = value != 0.0,
+        Binding::Method => {
+            if let Some(m) = Method::from_fmi_value(value) {
+                scene.solver.method = m;
+            }
+        }
+        Binding::Rtol => scene.solver.rtol = value,
+        Binding::Atol => scene.solver.atol = value,
+        Binding::Stiffness(j) => scene.cables[j].stiffness = Some(value),
+        Binding::RestLength(j) => scene.cables[j].rest_length = Some(value),
+        Binding::Damping(j) => scene.cables[j].damping = Some(value),
+        Binding::Mass(i) => scene.bars[i].mass = value,
+        Binding::Gravity(axis) => {
+            if let Some(g) = &mut scene.gravity {
+                g[axis] = value;
+            }
+        }
+        Binding::PointMass(k) => scene.point_masses[k].mass = value,
+        Binding::Ground(field) => {
+            if let Some(g) = &mut scene.ground {
+                *ground_field(g, field) = value;
+            }
+        }
+        Binding::Load(k, field) => {
+            if let Some(v) = load_field(&mut scene.loads[k], field) {
+                *v = value;
+            }
+        }
+        Binding::Output(_)
+        | Binding::ForceDensity(_)
+        | Binding::NodeForce(..)
+        | Binding::ReelInput(_) => {}
+    }
+}
+
+/// The scene value behind a load parameter (`None` for a field the load lacks).
+fn load_field(load: &mut LoadSpec, field: LoadField) -> Option<&mut f64> {
+    match (load, field) {
+        (
+            LoadSpec::Constant { force, .. }
+            | LoadSpec::Step { force, .. }
+            | LoadSpec::Sinusoidal {
+                amplitude: force, ..
+            },
+            LoadField::Force(axis),
+        ) => Some(&mut force[axis]),
+        (LoadSpec::Sinusoidal { frequency, .. }, LoadField::Frequency) => Some(frequency),
+        (LoadSpec::Sinusoidal { phase, .. }, LoadField::Phase) => Some(phase),
+        (LoadSpec::Step { time, .. }, LoadField::Time) => Some(time),
+        _ => None,
+    }
+}
+
+/// The scene value behind a ground parameter.
+fn ground_field(g: &mut GroundSpec, field: GroundField) -> &mut f64 {
+    match field {
+        GroundField::Height => &mut g.height,
+        GroundField::Stiffness => &mut g.stiffness,
+        GroundField::Damping => &mut g.damping,
+        GroundField::Friction => &mut g.friction,
+        GroundField::SlipVelocity => &mut g.slip_velocity,
+    }
+}
