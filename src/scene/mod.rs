@@ -260,6 +260,14 @@ pub struct SolverSpec {
     pub rtol: f64,
     /// Absolute tolerance of the adaptive method (m and m/s).
     pub atol: f64,
+    /// Most internal steps (accepted or rejected) one call may take: one `fmi2DoStep`,
+    /// one CSV interval. Bounds the work of a hostile communication step.
+    pub max_steps: u64,
+}
+
+impl SolverSpec {
+    /// Default of [`SolverSpec::max_steps`]: about 3 s of tower20 at 32 µs per step.
+    pub const DEFAULT_MAX_STEPS: u64 = 100_000;
 }
 
 impl Default for SolverSpec {
@@ -270,6 +278,7 @@ impl Default for SolverSpec {
             method: Method::Rk4,
             rtol: 1e-6,
             atol: 1e-9,
+            max_steps: Self::DEFAULT_MAX_STEPS,
         }
     }
 }

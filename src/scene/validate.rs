@@ -219,6 +219,12 @@ pub(super) fn validate(scene: &Scene) -> Result<(), SceneError> {
             return Err(SceneError::invalid(key, format!("must be ≥ 0, got {v}")));
         }
     }
+    if scene.solver.max_steps == 0 {
+        return Err(SceneError::invalid(
+            "solver.max_steps",
+            "must be at least 1 (it caps the internal steps of one call)",
+        ));
+    }
     if scene.solver.rtol == 0.0 && scene.solver.atol == 0.0 {
         return Err(SceneError::invalid(
             "solver.rtol",
