@@ -78,6 +78,28 @@ pub enum StepError {
         /// Names the limit and the fixes.
         message: String,
     },
+    /// One call would take more internal steps than `solver.max_steps` allows.
+    #[error("{what} takes more than solver.max_steps = {max} internal steps (t = {from} s to {to} s); nothing was integrated. Use shorter communication steps or intervals, a larger solver.step_size, or raise solver.max_steps")]
+    TooManySteps {
+        /// What needs the steps, e.g. "this advance (about 1e9 steps of 1e-12 s)".
+        what: String,
+        /// The cap.
+        max: u64,
+        /// Start time, s.
+        from: f64,
+        /// Target time, s.
+        to: f64,
+    },
+    /// Time has grown so large that a step no longer changes it accurately.
+    #[error("at t = {time} s the time resolution ({resolution:e} s) is too coarse for solver.step_size = {step} s (the steps would not advance time accurately); nothing was integrated. Start the experiment nearer 0 or use a larger solver.step_size")]
+    TimeResolution {
+        /// The time reached, s.
+        time: f64,
+        /// Spacing of doubles at that time, s.
+        resolution: f64,
+        /// The internal step, s.
+        step: f64,
+    },
     /// An input holds a NaN or an infinity.
     #[error("input {name} is not finite ({value})")]
     NonFiniteInput {
@@ -86,4 +108,18 @@ pub enum StepError {
         /// The offending value.
         value: f64,
     },
+}
+
+impl StepError {
+    /// Refused before any integration (too many steps, coarse time, an unstable fixed
+    /// step, a non-finite input): the caller may correct the request and carry on.
+    pub fn changed_nothing(&self) -> bool {
+        matches!(
+            self,
+            Self::TooManySteps { .. }
+                | Self::TimeResolution { .. }
+                | Self::Unstable { .. }
+                | Self::NonFiniteInput { .. }
+        )
+    }
 }

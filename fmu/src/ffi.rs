@@ -3,7 +3,7 @@
 use std::ffi::{CStr, CString};
 
 use fmi_sys::fmi2::*;
-use tensegrity_fmu::fmi::{Category, FmiError, Instance, Status};
+use tensegrity_fmu::fmi::{Category, FmiError, Instance};
 
 /// An instance plus what the importer gave for logging.
 pub struct Component {
@@ -93,27 +93,60 @@ pub unsafe fn text(p: fmi2String) -> Option<String> {
     (!p.is_null()).then(|| CStr::from_ptr(p).to_string_lossy().into_owned())
 }
 
-fn null(what: &str) -> FmiError {
-    FmiError {
-        status: Status::Error,
-        message: format!("{what} is NULL"),
+/// Refuses NULL for `n > 0`, and a count no array of `T` can have (it would abort the
+/// host, or be undefined behaviour, to treat it as one).
+fn check<T>(p: *const T, n: usize, what: &str) -> Result<(), FmiError> {
+    if n > 0 && p.is_null() {
+        return Err(FmiError::refused(format!(
+            "{what} is NULL but {n} elements were passed"
+        )));
     }
+    let limit = isize::MAX as usize / std::mem::size_of::<T>().max(1);
+    if n > limit {
+        return Err(FmiError::refused(format!(
+            "{what}: {n} elements is more than any array can hold; pass the number of elements"
+        )));
+    }
+    Ok(())
 }
 
 /// `n` elements at `p`; NULL is allowed only for `n == 0`.
 pub unsafe fn slice<'a, T>(p: *const T, n: usize, what: &str) -> Result<&'a [T], FmiError> {
-    match (n, p.is_null()) {
-        (0, _) => Ok(&[]),
-        (_, true) => Err(null(what)),
-        _ => Ok(std::slice::from_raw_parts(p, n)),
-    }
+    check(p, n, what)?;
+    Ok(if n == 0 {
+        &[]
+    } else {
+        std::slice::from_raw_parts(p, n)
+    })
 }
 
 /// `n` writable elements at `p`; NULL is allowed only for `n == 0`.
 pub unsafe fn slice_mut<'a, T>(p: *mut T, n: usize, what: &str) -> Result<&'a mut [T], FmiError> {
-    match (n, p.is_null()) {
-        (0, _) => Ok(&mut []),
-        (_, true) => Err(null(what)),
-        _ => Ok(std::slice::from_raw_parts_mut(p, n)),
-    }
+    check(p, n, what)?;
+    Ok(if n == 0 {
+        &mut []
+    } else {
+        std::slice::from_raw_parts_mut(p, n)
+    })
 }
+
+/// Value references of a get/set call: at most [`MAX_REQUESTS_PER_VARIABLE`] per variable
+/// of the FMU (plus a margin), so a wrong `nvr` is refused before any element is read.
+pub unsafe fn value_references<'a>(
+    instance: &Instance,
+    vr: *const fmi2ValueReference,
+    nvr: usize,
+    call: &str,
+) -> Result<&'a [fmi2ValueReference], FmiError> {
+    let limit = MAX_REQUESTS_PER_VARIABLE * instance.table().variables.len() + 1024;
+    if nvr > limit {
+        return Err(FmiError::refused(format!(
+            "{call}: nvr = {nvr} value references, more than {limit} ({MAX_REQUESTS_PER_VARIABLE} \
+             per variable of this FMU); pass the number of elements of vr"
+        )));
+    }
+    slice(vr, nvr, &format!("{call}: vr"))
+}
+
+/// Repeats of a variable in one call beyond which `nvr` is taken for a mistake.
+pub const MAX_REQUESTS_PER_VARIABLE: usize = 16;

@@ -6,17 +6,18 @@
 #![allow(clippy::missing_safety_doc)]
 
 mod ffi;
+mod guard;
 mod state;
 
 use std::ffi::c_char;
-use std::panic::{catch_unwind, AssertUnwindSafe};
+use std::panic::AssertUnwindSafe;
 use std::ptr;
 
 use fmi_sys::fmi2::*;
 use tensegrity_fmu::fmi::variables::BaseType;
 use tensegrity_fmu::fmi::{resource_path, Category, FmiError, FmiResult, Instance, Status};
 
-use ffi::{slice, slice_mut, text, Component};
+use ffi::{slice, slice_mut, text, value_references, Component};
 pub use state::*;
 
 const ERROR: fmi2Status = fmi2Status_fmi2Error;
@@ -35,7 +36,7 @@ fn call(c: fmi2Component, name: &str, body: impl FnOnce(&mut Instance) -> FmiRes
     let Some(component) = (unsafe { (c as *mut Component).as_mut() }) else {
         return ERROR;
     };
-    let result = catch_unwind(AssertUnwindSafe(|| body(&mut component.instance)));
+    let result = guard::quietly(AssertUnwindSafe(|| body(&mut component.instance)));
     let out = match result {
         Ok(Ok(s)) => status(s),
         Ok(Err(e)) => {
@@ -43,15 +44,9 @@ fn call(c: fmi2Component, name: &str, body: impl FnOnce(&mut Instance) -> FmiRes
             status(e.status)
         }
         Err(panic) => {
-            let what = panic
-                .downcast_ref::<&str>()
-                .map(|s| s.to_string())
-                .or_else(|| panic.downcast_ref::<String>().cloned())
-                .unwrap_or_default();
-            component.instance.fail(&FmiError {
-                status: Status::Error,
-                message: format!("{name}: internal error: {what}"),
-            });
+            component.instance.fail(&FmiError::failed(format!(
+                "{name}: internal error: {panic}"
+            )));
             ERROR
         }
     };
@@ -60,10 +55,7 @@ fn call(c: fmi2Component, name: &str, body: impl FnOnce(&mut Instance) -> FmiRes
 }
 
 fn fail(message: String) -> FmiError {
-    FmiError {
-        status: Status::Error,
-        message,
-    }
+    FmiError::refused(message)
 }
 
 #[no_mangle]
@@ -116,7 +108,7 @@ pub unsafe extern "C" fn fmi2Instantiate(
             message,
         )
     };
-    let built = catch_unwind(|| {
+    let built = guard::quietly(|| {
         if fmuType != fmi2Type_fmi2CoSimulation {
             return Err("fmi2Instantiate: this FMU supports co-simulation only".to_string());
         }
@@ -136,8 +128,8 @@ pub unsafe extern "C" fn fmi2Instantiate(
             report(&message);
             ptr::null_mut()
         }
-        Err(_) => {
-            report("fmi2Instantiate: internal error");
+        Err(panic) => {
+            report(&format!("fmi2Instantiate: internal error: {panic}"));
             ptr::null_mut()
         }
     }
@@ -146,7 +138,9 @@ pub unsafe extern "C" fn fmi2Instantiate(
 #[no_mangle]
 pub unsafe extern "C" fn fmi2FreeInstance(c: fmi2Component) {
     if !c.is_null() {
-        let _ = catch_unwind(|| drop(Box::from_raw(c as *mut Component)));
+        let _ = guard::quietly(AssertUnwindSafe(|| {
+            drop(Box::from_raw(c as *mut Component))
+        }));
     }
 }
 
@@ -200,7 +194,7 @@ pub unsafe extern "C" fn fmi2GetReal(
     value: *mut fmi2Real,
 ) -> fmi2Status {
     call(c, "fmi2GetReal", |i| {
-        let vrs = slice(vr, nvr, "fmi2GetReal: vr")?;
+        let vrs = value_references(i, vr, nvr, "fmi2GetReal")?;
         let values = slice_mut(value, nvr, "fmi2GetReal: value")?;
         i.get("fmi2GetReal", BaseType::Real, vrs, values)
     })
@@ -214,14 +208,11 @@ pub unsafe extern "C" fn fmi2GetBoolean(
     value: *mut fmi2Boolean,
 ) -> fmi2Status {
     call(c, "fmi2GetBoolean", |i| {
-        let vrs = slice(vr, nvr, "fmi2GetBoolean: vr")?;
+        let vrs = value_references(i, vr, nvr, "fmi2GetBoolean")?;
         let out = slice_mut(value, nvr, "fmi2GetBoolean: value")?;
-        let mut reals = vec![0.0; nvr];
-        let s = i.get("fmi2GetBoolean", BaseType::Boolean, vrs, &mut reals)?;
-        for (o, r) in out.iter_mut().zip(reals) {
-            *o = fmi2Boolean::from(r != 0.0);
-        }
-        Ok(s)
+        i.get_each("fmi2GetBoolean", BaseType::Boolean, vrs, |k, v| {
+            out[k] = fmi2Boolean::from(v != 0.0)
+        })
     })
 }
 
@@ -233,14 +224,11 @@ pub unsafe extern "C" fn fmi2GetInteger(
     value: *mut fmi2Integer,
 ) -> fmi2Status {
     call(c, "fmi2GetInteger", |i| {
-        let vrs = slice(vr, nvr, "fmi2GetInteger: vr")?;
+        let vrs = value_references(i, vr, nvr, "fmi2GetInteger")?;
         let out = slice_mut(value, nvr, "fmi2GetInteger: value")?;
-        let mut reals = vec![0.0; nvr];
-        let s = i.get("fmi2GetInteger", BaseType::Enumeration, vrs, &mut reals)?;
-        for (o, r) in out.iter_mut().zip(reals) {
-            *o = r as fmi2Integer;
-        }
-        Ok(s)
+        i.get_each("fmi2GetInteger", BaseType::Enumeration, vrs, |k, v| {
+            out[k] = v as fmi2Integer
+        })
     })
 }
 
@@ -252,7 +240,8 @@ pub unsafe extern "C" fn fmi2GetString(
     _value: *mut fmi2String,
 ) -> fmi2Status {
     call(c, "fmi2GetString", |i| {
-        i.untyped("fmi2GetString", slice(vr, nvr, "fmi2GetString: vr")?)
+        let vrs = value_references(i, vr, nvr, "fmi2GetString")?;
+        i.untyped("fmi2GetString", vrs)
     })
 }
 
@@ -264,7 +253,7 @@ pub unsafe extern "C" fn fmi2SetReal(
     value: *const fmi2Real,
 ) -> fmi2Status {
     call(c, "fmi2SetReal", |i| {
-        let vrs = slice(vr, nvr, "fmi2SetReal: vr")?;
+        let vrs = value_references(i, vr, nvr, "fmi2SetReal")?;
         let values = slice(value, nvr, "fmi2SetReal: value")?;
         i.set("fmi2SetReal", BaseType::Real, vrs, values)
     })
@@ -278,12 +267,11 @@ pub unsafe extern "C" fn fmi2SetBoolean(
     value: *const fmi2Boolean,
 ) -> fmi2Status {
     call(c, "fmi2SetBoolean", |i| {
-        let vrs = slice(vr, nvr, "fmi2SetBoolean: vr")?;
-        let values: Vec<f64> = slice(value, nvr, "fmi2SetBoolean: value")?
-            .iter()
-            .map(|&b| f64::from(u8::from(b != 0)))
-            .collect();
-        i.set("fmi2SetBoolean", BaseType::Boolean, vrs, &values)
+        let vrs = value_references(i, vr, nvr, "fmi2SetBoolean")?;
+        let values = slice(value, nvr, "fmi2SetBoolean: value")?;
+        i.set_each("fmi2SetBoolean", BaseType::Boolean, vrs, |k| {
+            f64::from(u8::from(values[k] != 0))
+        })
     })
 }
 
@@ -295,12 +283,11 @@ pub unsafe extern "C" fn fmi2SetInteger(
     value: *const fmi2Integer,
 ) -> fmi2Status {
     call(c, "fmi2SetInteger", |i| {
-        let vrs = slice(vr, nvr, "fmi2SetInteger: vr")?;
-        let values: Vec<f64> = slice(value, nvr, "fmi2SetInteger: value")?
-            .iter()
-            .map(|&v| f64::from(v))
-            .collect();
-        i.set("fmi2SetInteger", BaseType::Enumeration, vrs, &values)
+        let vrs = value_references(i, vr, nvr, "fmi2SetInteger")?;
+        let values = slice(value, nvr, "fmi2SetInteger: value")?;
+        i.set_each("fmi2SetInteger", BaseType::Enumeration, vrs, |k| {
+            f64::from(values[k])
+        })
     })
 }
 
@@ -312,7 +299,8 @@ pub unsafe extern "C" fn fmi2SetString(
     _value: *const fmi2String,
 ) -> fmi2Status {
     call(c, "fmi2SetString", |i| {
-        i.untyped("fmi2SetString", slice(vr, nvr, "fmi2SetString: vr")?)
+        let vrs = value_references(i, vr, nvr, "fmi2SetString")?;
+        i.untyped("fmi2SetString", vrs)
     })
 }
 

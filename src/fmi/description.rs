@@ -7,19 +7,23 @@ use super::Category;
 use crate::integrator::Method;
 use crate::model::Model;
 
-/// Name of the shared library inside `binaries/linux64/` (without `.so`).
+/// Longest model identifier: C compilers guarantee 63 significant characters.
+pub const MAX_MODEL_IDENTIFIER: usize = 63;
+
+/// Name of the shared library inside `binaries/linux64/` (without `.so`): the scene name
+/// as a C identifier (other characters become `_`), at most [`MAX_MODEL_IDENTIFIER`] long.
 pub fn model_identifier(model: &Model) -> String {
-    let id: String = model
+    let mut id: String = model
         .scene
         .name
         .chars()
         .map(|c| if c.is_ascii_alphanumeric() { c } else { '_' })
         .collect();
     if id.starts_with(|c: char| c.is_ascii_digit()) || id.is_empty() {
-        format!("t_{id}")
-    } else {
-        id
+        id.insert_str(0, "t_");
     }
+    id.truncate(MAX_MODEL_IDENTIFIER);
+    id
 }
 
 /// The model description of an FMU for `model`, with variables from `table`.

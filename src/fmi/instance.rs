@@ -5,12 +5,11 @@
 
 use std::path::Path;
 
-use super::parameters::{apply_parameter, read_parameter};
+use super::parameters::read_parameter;
 use super::snapshot::Snapshot;
-use super::variables::{BaseType, Binding, VariableTable};
+use super::variables::{Binding, VariableTable};
 use super::{guid_for, Category, Message, Mode, Status};
 use crate::dynamics::Inputs;
-use crate::integrator::Method;
 use crate::model::Model;
 use crate::scene::Scene;
 use crate::sim::Simulation;
@@ -22,16 +21,37 @@ pub struct FmiError {
     pub status: Status,
     /// The message, naming the call and the reason.
     pub message: String,
+    /// A failed computation puts the instance into the Error mode (left by `fmi2Reset` or
+    /// `fmi2SetFMUstate`); a refused call changed nothing, so the instance carries on.
+    pub enters_error_mode: bool,
+}
+
+impl FmiError {
+    /// A call refused before it changed anything (bad arguments, illegal sequence,
+    /// rejected values): `fmi2Error`, and the instance stays in its mode.
+    pub fn refused(message: impl Into<String>) -> Self {
+        Self {
+            status: Status::Error,
+            message: message.into(),
+            enters_error_mode: false,
+        }
+    }
+
+    /// A computation that failed (numerical failure, a model that cannot be built, an
+    /// internal error): `fmi2Error`, and the instance enters the Error mode.
+    pub fn failed(message: impl Into<String>) -> Self {
+        Self {
+            enters_error_mode: true,
+            ..Self::refused(message)
+        }
+    }
 }
 
 /// Result of an instance method: the status to return on success.
 pub type FmiResult<T = Status> = Result<T, FmiError>;
 
 fn error(message: impl Into<String>) -> FmiError {
-    FmiError {
-        status: Status::Error,
-        message: message.into(),
-    }
+    FmiError::refused(message)
 }
 
 /// Everything that `Reset` restores.
@@ -52,9 +72,9 @@ pub(super) struct Core {
 pub struct Instance {
     name: String,
     guid: String,
-    core: Core,
+    pub(super) core: Core,
     fresh: Core,
-    logging: [bool; 3],
+    pub(super) logging: [bool; 3],
     messages: Vec<Message>,
 }
 
@@ -155,7 +175,7 @@ impl Instance {
 
     /// Records a failed call: logs it and, for an error, enters the Error mode.
     pub fn fail(&mut self, err: &FmiError) {
-        if err.status == Status::Error {
+        if err.enters_error_mode {
             self.core.mode = Mode::Error;
         }
         self.log(Category::Error, err.message.clone());
@@ -179,7 +199,7 @@ impl Instance {
         Ok(Status::Ok)
     }
 
-    fn require(&self, call: &str, allowed: &[Mode]) -> FmiResult<()> {
+    pub(super) fn require(&self, call: &str, allowed: &[Mode]) -> FmiResult<()> {
         if allowed.contains(&self.core.mode) {
             Ok(())
         } else {
@@ -215,6 +235,7 @@ impl Instance {
     pub fn exit_initialization_mode(&mut self) -> FmiResult {
         self.require("fmi2ExitInitializationMode", &[Mode::InitializationMode])?;
         self.rebuild_if_needed("fmi2ExitInitializationMode")?;
+        self.check_start("fmi2ExitInitializationMode")?;
         self.core.mode = Mode::StepComplete;
         if let Some(why) = self.core.sim.check_stability().map(str::to_string) {
             self.log(
@@ -234,6 +255,26 @@ impl Instance {
         );
         self.log(Category::Events, summary);
         Ok(Status::Ok)
+    }
+
+    /// Refuses a step size the structure's time scale makes absurd, or a start time at which
+    /// the step cannot advance time; the instance stays in initialization mode to be fixed.
+    fn check_start(&mut self, call: &str) -> FmiResult<()> {
+        if let Some(why) = self.core.sim.step_size_problem() {
+            return Err(error(format!("{call}: {why}")));
+        }
+        let step = self.core.scene.solver.step_size;
+        let resolution = self.core.time.abs() * f64::EPSILON;
+        if resolution > 1e-6 * step {
+            return Err(error(format!(
+                "{call}: the start time {} s is so large that its resolution ({resolution:e} s) \
+                 is too coarse for solver.step_size = {step} s, so time would not advance \
+                 accurately. Start the experiment nearer 0 (fmi2SetupExperiment) or use a larger \
+                 solver.step_size",
+                self.core.time
+            )));
+        }
+        Ok(())
     }
 
     /// `fmi2Terminate`.
@@ -257,165 +298,22 @@ impl Instance {
         if !self.core.rebuild {
             return Ok(());
         }
-        let model =
-            Model::new(&self.core.scene).map_err(|e| error(format!("{call}: parameters: {e}")))?;
-        let inputs = self.core.sim.inputs.clone();
-        let time = self.core.time;
-        self.core.sim = Simulation::new(model);
-        self.core.sim.inputs = inputs;
-        self.core.sim.set_time(time);
+        self.core.sim = self
+            .core
+            .rebuilt(&self.core.scene)
+            .map_err(|e| FmiError::failed(format!("{call}: parameters: {e}")))?;
         self.core.rebuild = false;
         self.core.stale = true;
         Ok(())
     }
 
-    fn refresh_outputs(&mut self, call: &str) -> FmiResult<()> {
+    pub(super) fn refresh_outputs(&mut self, call: &str) -> FmiResult<()> {
         self.rebuild_if_needed(call)?;
         if self.core.stale {
             self.core.sim.refresh();
             self.core.stale = false;
         }
         Ok(())
-    }
-
-    fn lookup(&self, call: &str, vr: u32, expected: BaseType) -> FmiResult<Binding> {
-        let v = self
-            .core
-            .table
-            .get(vr)
-            .ok_or_else(|| error(format!("{call}: unknown value reference {vr}")))?;
-        if v.base_type != expected {
-            return Err(error(format!(
-                "{call}: value reference {vr} ({}) is not of this type",
-                v.name
-            )));
-        }
-        Ok(v.binding)
-    }
-
-    /// `fmi2GetReal` / `fmi2GetBoolean` (Booleans as 0/1).
-    pub fn get(
-        &mut self,
-        call: &str,
-        base: BaseType,
-        vrs: &[u32],
-        values: &mut [f64],
-    ) -> FmiResult {
-        self.require(
-            call,
-            &[
-                Mode::InitializationMode,
-                Mode::StepComplete,
-                Mode::Terminated,
-                Mode::Error,
-            ],
-        )?;
-        self.refresh_outputs(call)?;
-        for (vr, value) in vrs.iter().zip(values.iter_mut()) {
-            let binding = self.lookup(call, *vr, base)?;
-            *value = self.core.read(binding);
-        }
-        Ok(Status::Ok)
-    }
-
-    /// Get or set of a type this FMU has no variables of (Integer, String): only an
-    /// empty request succeeds.
-    pub fn untyped(&mut self, call: &str, vrs: &[u32]) -> FmiResult {
-        self.require(
-            call,
-            &[
-                Mode::Instantiated,
-                Mode::InitializationMode,
-                Mode::StepComplete,
-                Mode::Terminated,
-                Mode::Error,
-            ],
-        )?;
-        match vrs.first() {
-            None => Ok(Status::Ok),
-            Some(vr) => Err(error(format!(
-                "{call}: value reference {vr} is not a variable of this type (this FMU has no String variables)"
-            ))),
-        }
-    }
-
-    /// `fmi2SetReal` / `fmi2SetBoolean`. Nothing is changed unless every value is accepted.
-    pub fn set(&mut self, call: &str, base: BaseType, vrs: &[u32], values: &[f64]) -> FmiResult {
-        self.require(
-            call,
-            &[
-                Mode::Instantiated,
-                Mode::InitializationMode,
-                Mode::StepComplete,
-            ],
-        )?;
-        let mut next = self.core.clone_for_set();
-        let mut status = Status::Ok;
-        for (vr, &value) in vrs.iter().zip(values) {
-            let binding = self.lookup(call, *vr, base)?;
-            let name = self.core.table.variables[*vr as usize].name.clone();
-            if !value.is_finite() {
-                return Err(error(format!(
-                    "{call}: {name} = {value} is not a finite number"
-                )));
-            }
-            let fixed = !matches!(
-                binding,
-                Binding::ForceDensity(_) | Binding::NodeForce(..) | Binding::ReelInput(_)
-            );
-            if matches!(binding, Binding::Output(_)) {
-                return Err(error(format!(
-                    "{call}: {name} is an output and cannot be set"
-                )));
-            }
-            if fixed && self.core.mode == Mode::StepComplete {
-                return Err(error(format!(
-                    "{call}: {name} is a fixed parameter and cannot be set after initialization"
-                )));
-            }
-            match binding {
-                Binding::ForceDensity(k) => {
-                    if value < 0.0 && !next.warned_negative[k] {
-                        next.warned_negative[k] = true;
-                        status = Status::Warning;
-                        self.log(
-                            Category::Warning,
-                            format!("{call}: {name} = {value} is negative; a cable cannot push, so it acts as 0 (warned once)"),
-                        );
-                    }
-                    next.inputs.force_density[k] = value;
-                }
-                Binding::ReelInput(k) => {
-                    let flag = self.core.sim.model().controlled.len() + k;
-                    if value < 0.0 && !next.warned_negative[flag] {
-                        next.warned_negative[flag] = true;
-                        status = Status::Warning;
-                        self.log(
-                            Category::Warning,
-                            format!(
-                                "{call}: {name} = {value} is negative; it acts as 0 (warned once)"
-                            ),
-                        );
-                    }
-                    next.inputs.rest_length[k] = value;
-                }
-                Binding::NodeForce(k, axis) => next.inputs.node_force[k][axis] = value,
-                Binding::Method if Method::from_fmi_value(value).is_none() => {
-                    return Err(error(format!(
-                        "{call}: {name} = {value} is not a method (1 = rk4, 2 = dopri5, 3 = rattle)"
-                    )));
-                }
-                _ => {
-                    apply_parameter(&mut next.scene, binding, value);
-                    next.scene
-                        .validate()
-                        .map_err(|e| error(format!("{call}: {name} = {value} rejected: {e}")))?;
-                    next.rebuild = true;
-                }
-            }
-        }
-        self.core.commit_set(next);
-        Ok(status)
     }
 
     /// `fmi2DoStep`: internal steps of `solver.step_size` from `t` to `t + h`, the last one
@@ -441,11 +339,14 @@ impl Instance {
                 )));
             }
         }
-        let steps = self
-            .core
-            .sim
-            .advance_to(end)
-            .map_err(|e| error(format!("fmi2DoStep: {e}")))?;
+        let steps = self.core.sim.advance_to(end).map_err(|e| {
+            let message = format!("fmi2DoStep: {e}");
+            if e.changed_nothing() {
+                FmiError::refused(message)
+            } else {
+                FmiError::failed(message)
+            }
+        })?;
         self.core.time = end;
         self.core.stale = true;
         if self.logging[Category::Events as usize] {
@@ -516,10 +417,10 @@ impl Instance {
 
 /// The parts of [`Core`] that a set call may change, applied only if all values pass.
 pub(super) struct PendingSet {
-    scene: Scene,
-    inputs: Inputs,
-    warned_negative: Vec<bool>,
-    rebuild: bool,
+    pub(super) scene: Scene,
+    pub(super) inputs: Inputs,
+    pub(super) warned_negative: Vec<bool>,
+    pub(super) rebuild: bool,
 }
 
 impl Core {
@@ -536,7 +437,23 @@ impl Core {
         }
     }
 
-    fn clone_for_set(&self) -> PendingSet {
+    /// A simulation of `scene`'s parameters with this one's inputs, time and, once
+    /// initialized, its state: what a parameter change rebuilds.
+    pub(super) fn rebuilt(&self, scene: &Scene) -> Result<Simulation, String> {
+        let mut sim = Simulation::new(Model::new(scene).map_err(|e| e.to_string())?);
+        sim.inputs = self.sim.inputs.clone();
+        if matches!(
+            self.mode,
+            Mode::StepComplete | Mode::Terminated | Mode::Error
+        ) {
+            sim.set_state(self.sim.state().clone());
+        } else {
+            sim.set_time(self.time);
+        }
+        Ok(sim)
+    }
+
+    pub(super) fn clone_for_set(&self) -> PendingSet {
         PendingSet {
             scene: self.scene.clone(),
             inputs: self.sim.inputs.clone(),
@@ -545,7 +462,7 @@ impl Core {
         }
     }
 
-    fn commit_set(&mut self, next: PendingSet) {
+    pub(super) fn commit_set(&mut self, next: PendingSet) {
         self.scene = next.scene;
         self.sim.inputs = next.inputs;
         self.warned_negative = next.warned_negative;

@@ -44,7 +44,10 @@ pub fn golden_model_description(scene: &Scene) -> Result<String, String> {
 pub fn build_fmu(scene: &Scene, binary: &Path, out: &Path) -> Result<Built, String> {
     let scene_text = scene.to_toml_string();
     let model = Model::new(scene).map_err(|e| e.to_string())?;
-    let sim = Simulation::new(model);
+    let mut sim = Simulation::new(model);
+    if let Some(why) = sim.step_size_problem() {
+        return Err(why);
+    }
     let table = VariableTable::new(&sim);
     let guid = guid_for(&scene_text);
     let description = model_description(sim.model(), &table, &guid);
@@ -62,10 +65,6 @@ pub fn build_fmu(scene: &Scene, binary: &Path, out: &Path) -> Result<Built, Stri
             binary.display()
         ));
     }
-    let file =
-        std::fs::File::create(out).map_err(|e| format!("cannot create {}: {e}", out.display()))?;
-    let mut zip = zip::ZipWriter::new(file);
-    let options = SimpleFileOptions::default().compression_method(zip::CompressionMethod::Deflated);
     let html = index_html(sim.model(), &table);
     let entries: [(String, &[u8]); 4] = [
         ("modelDescription.xml".into(), xml.as_bytes()),
@@ -73,19 +72,45 @@ pub fn build_fmu(scene: &Scene, binary: &Path, out: &Path) -> Result<Built, Stri
         ("resources/scene.toml".into(), scene_text.as_bytes()),
         ("documentation/index.html".into(), html.as_bytes()),
     ];
-    let write =
-        |zip: &mut zip::ZipWriter<std::fs::File>, name: &str, data: &[u8]| -> Result<(), String> {
-            zip.start_file(name, options).map_err(|e| e.to_string())?;
-            zip.write_all(data).map_err(|e| e.to_string())
-        };
-    for (name, data) in &entries {
-        write(&mut zip, name, data)?;
-    }
-    zip.finish()
-        .map_err(|e| format!("writing {}: {e}", out.display()))?;
+    write_atomically(out, &entries)?;
     Ok(Built {
         guid,
         model_identifier: id,
         variables: table.variables.len(),
     })
+}
+
+/// Writes the archive beside `out` under a temporary name and renames it into place, so
+/// a failure never leaves a partial `.fmu` (nor clobbers an existing one).
+fn write_atomically(out: &Path, entries: &[(String, &[u8])]) -> Result<(), String> {
+    let file_name = out
+        .file_name()
+        .ok_or_else(|| format!("{}: not a file name", out.display()))?;
+    let mut partial_name = std::ffi::OsString::from(".");
+    partial_name.push(file_name);
+    partial_name.push(format!(".partial-{}", std::process::id()));
+    let partial = out.with_file_name(partial_name);
+    let written = write_zip(&partial, entries).and_then(|()| {
+        std::fs::rename(&partial, out).map_err(|e| format!("cannot create {}: {e}", out.display()))
+    });
+    if written.is_err() {
+        let _ = std::fs::remove_file(&partial);
+    }
+    written
+}
+
+fn write_zip(path: &Path, entries: &[(String, &[u8])]) -> Result<(), String> {
+    let failed = |e: &dyn std::fmt::Display| format!("writing {}: {e}", path.display());
+    let file = std::fs::File::create(path)
+        .map_err(|e| format!("cannot create {}: {e}", path.display()))?;
+    let mut zip = zip::ZipWriter::new(file);
+    let options = SimpleFileOptions::default().compression_method(zip::CompressionMethod::Deflated);
+    for (name, data) in entries {
+        zip.start_file(name.as_str(), options)
+            .map_err(|e| failed(&format!("{name}: {e}")))?;
+        zip.write_all(data)
+            .map_err(|e| failed(&format!("{name}: {e}")))?;
+    }
+    zip.finish().map_err(|e| failed(&e))?;
+    Ok(())
 }

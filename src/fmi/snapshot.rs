@@ -207,6 +207,15 @@ impl Snapshot {
         if !finite {
             return Err("corrupt state: non-finite values".into());
         }
+        // The communication time and the integrated state's time always agree; an edited
+        // one would send the next fmi2DoStep integrating across the gap.
+        if time != state_time {
+            return Err(format!(
+                "inconsistent state: its communication time {time} s differs from the time of \
+                 its integrated state {state_time} s (edited or corrupt); use a state saved by \
+                 fmi2SerializeFMUstate unchanged"
+            ));
+        }
         Ok(Self {
             guid: found,
             mode,

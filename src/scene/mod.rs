@@ -4,6 +4,7 @@
 //! message, a CSV column or an FMU variable uses that numbering.
 
 mod builtin;
+pub mod limits;
 mod validate;
 
 pub use builtin::{builtin, builtin_names, generate, tower_scene, BUILTIN_DEFAULT};

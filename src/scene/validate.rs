@@ -183,6 +183,7 @@ pub(super) fn validate(scene: &Scene) -> Result<(), SceneError> {
     if let Some(ground) = &scene.ground {
         validate_ground(ground)?;
     }
+    super::limits::check(scene)?;
     if let Some(vs) = &scene.velocities {
         if vs.len() != n {
             return Err(SceneError::invalid(

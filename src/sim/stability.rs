@@ -10,6 +10,10 @@ use crate::dynamics;
 use crate::integrator::Method;
 use crate::model::Model;
 
+/// Smallest sensible `h ω`: below it a step resolves a millionth of the fastest mode's
+/// period/2π, round-off dominates the truncation error, and runs take millions of steps.
+pub const MIN_STEP_PER_TIME_SCALE: f64 = 1e-6;
+
 /// Largest stable `h ω` on the imaginary axis: RK4 2√2; velocity Verlet 2.
 pub fn stability_limit(method: Method) -> Option<f64> {
     match method {
@@ -123,6 +127,24 @@ impl Simulation {
             self.stability.checked_density = Some(density);
         }
         self.stability.problem.as_deref()
+    }
+
+    /// `Some(message)` when `solver.step_size` is absurdly small for the structure's fastest
+    /// time scale `1/ω` (for dopri5 it is the first trial step, held to the same bound).
+    pub fn step_size_problem(&mut self) -> Option<String> {
+        let h = self.model.solver.step_size;
+        let omega = self.max_frequency().max(contact_rate(&self.model));
+        let floor = MIN_STEP_PER_TIME_SCALE / omega;
+        (omega > 0.0 && h < floor).then(|| {
+            format!(
+                "solver.step_size = {h:e} s is below {MIN_STEP_PER_TIME_SCALE:e} of the structure's \
+                 fastest time scale (1/ω ≈ {:.3e} s): every step would resolve nothing but \
+                 round-off and a run would take billions of steps. Use solver.step_size ≥ {floor:.3e} s \
+                 (about {:.3e} s resolves the fastest mode well with rk4)",
+                1.0 / omega,
+                0.1 / omega
+            )
+        })
     }
 
     /// `Some(message)` when the fixed step exceeds the method's stability limit for the

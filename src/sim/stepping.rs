@@ -10,6 +10,9 @@ use crate::integrator::Outcome;
 /// Communication points closer than this (relative) count as reached.
 const TIME_EPS: f64 = 1e-12;
 
+/// The spacing of doubles at the current time may be at most this fraction of a step.
+const TIME_RESOLUTION: f64 = 1e-6;
+
 impl Simulation {
     /// Takes `n` steps of `h` from the current time; time is `t₀ + k h`, not a running sum.
     pub fn advance(&mut self, n: u64, h: f64) -> Result<(), StepError> {
@@ -49,6 +52,7 @@ impl Simulation {
     /// Returns the number of accepted steps; on failure the state is left as it was.
     pub fn advance_to(&mut self, t_end: f64) -> Result<u64, StepError> {
         self.check_inputs()?;
+        self.check_time_resolution(t_end)?;
         self.check_step_stability()?;
         self.note_input_changes();
         self.advance_start.time = self.state.time;
@@ -70,7 +74,17 @@ impl Simulation {
     fn advance_grid(&mut self, t_end: f64) -> Result<u64, StepError> {
         let t = self.state.time;
         let dt = self.model.solver.step_size;
-        let n = (((t_end - t) / dt) - 1e-9).ceil().max(1.0) as u64;
+        let steps = (((t_end - t) / dt) - 1e-9).ceil().max(1.0);
+        let max = self.model.solver.max_steps;
+        if !(steps <= max as f64) {
+            return Err(StepError::TooManySteps {
+                what: format!("this advance ({steps:.3e} steps of {dt} s)"),
+                max,
+                from: t,
+                to: t_end,
+            });
+        }
+        let n = steps as u64;
         for k in 0..n {
             let t0 = t + k as f64 * dt;
             let t1 = if k + 1 == n {
@@ -95,6 +109,8 @@ impl Simulation {
 
     fn advance_adaptive(&mut self, t_end: f64) -> Result<u64, StepError> {
         let mut accepted = 0;
+        let mut attempts = 0;
+        let max = self.model.solver.max_steps;
         loop {
             let t = self.state.time;
             let rest = t_end - t;
@@ -107,6 +123,15 @@ impl Simulation {
             if h <= 1e-14 * t.abs().max(1.0) {
                 return Err(StepError::StepSizeUnderflow { time: t, step: h });
             }
+            if attempts == max {
+                return Err(StepError::TooManySteps {
+                    what: format!("this advance with {}", self.integrator.name()),
+                    max,
+                    from: self.advance_start.time,
+                    to: t_end,
+                });
+            }
+            attempts += 1;
             self.last_good.copy_from_slice(&self.state.y);
             match self.attempt(t, h)? {
                 Outcome::Accepted { next } => {
@@ -160,6 +185,22 @@ impl Simulation {
         }
         self.stats.steps += 1;
         Ok(outcome)
+    }
+
+    /// Refuses a target whose doubles are too coarse for the internal step: beyond it
+    /// `t + h` rounds so much that the grid (or the stepping itself) breaks down.
+    fn check_time_resolution(&self, t_end: f64) -> Result<(), StepError> {
+        let step = self.model.solver.step_size;
+        let time = t_end.abs().max(self.state.time.abs());
+        let resolution = time * f64::EPSILON;
+        if resolution > TIME_RESOLUTION * step {
+            return Err(StepError::TimeResolution {
+                time,
+                resolution,
+                step,
+            });
+        }
+        Ok(())
     }
 
     fn restore_last_good(&mut self) {
