@@ -76,7 +76,7 @@ impl Simulation {
         let dt = self.model.solver.step_size;
         let steps = (((t_end - t) / dt) - 1e-9).ceil().max(1.0);
         let max = self.model.solver.max_steps;
-        if !(steps <= max as f64) {
+        if steps.is_nan() || steps > max as f64 {
             return Err(StepError::TooManySteps {
                 what: format!("this advance ({steps:.3e} steps of {dt} s)"),
                 max,
