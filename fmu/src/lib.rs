@@ -236,7 +236,7 @@ pub unsafe extern "C" fn fmi2GetInteger(
         let vrs = slice(vr, nvr, "fmi2GetInteger: vr")?;
         let out = slice_mut(value, nvr, "fmi2GetInteger: value")?;
         let mut reals = vec![0.0; nvr];
-        let s = i.get("fmi2GetInteger", BaseType::Enumeration, vrs, &mut reals)?;
+        let s = i.get("fmi2GetInteger", BaseType::Integer, vrs, &mut reals)?;
         for (o, r) in out.iter_mut().zip(reals) {
             *o = r as fmi2Integer;
         }
@@ -300,7 +300,7 @@ pub unsafe extern "C" fn fmi2SetInteger(
             .iter()
             .map(|&v| f64::from(v))
             .collect();
-        i.set("fmi2SetInteger", BaseType::Enumeration, vrs, &values)
+        i.set("fmi2SetInteger", BaseType::Integer, vrs, &values)
     })
 }
 

@@ -2,6 +2,7 @@
 //! machine, FMU-state snapshots, modelDescription.xml, documentation and packaging.
 //! The `extern "C"` functions live in the `fmu/` crate and only call into this module.
 
+pub mod dependencies;
 pub mod description;
 pub mod documentation;
 pub mod instance;
