@@ -45,10 +45,11 @@ fn git_commit(root: &Path) -> String {
     else {
         return "unknown".into();
     };
-    // Rerun when the commit or the staged state changes (sources are watched below). The
+    // Rerun when the commit changes; edits to the sources rerun it anyway (watched in
+    // `main`). The index is not watched: `git add` would rebuild the crate each time. The
     // paths come from git because a worktree keeps them outside `.git/`.
     let branch = git(root, &["symbolic-ref", "-q", "HEAD"]).unwrap_or_default();
-    for path in ["HEAD", "index", "packed-refs", branch.as_str()] {
+    for path in ["HEAD", "packed-refs", branch.as_str()] {
         if path.is_empty() {
             continue;
         }

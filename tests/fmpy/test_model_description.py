@@ -1,9 +1,13 @@
 """modelDescription.xml, the archive and the documentation of the built FMUs (issue 3, items 5-7)."""
 
+import datetime
 import math
+import os
 import subprocess
+import tomllib
 import xml.etree.ElementTree as ET
 import zipfile
+from pathlib import Path
 
 import pytest
 from fmpy import read_model_description
@@ -282,3 +286,125 @@ def test_documentation_lists_every_variable_with_unit(builtin, classk):
             if v.unit:
                 assert v.unit in rows[v.name], f"{v.name}: unit {v.unit} not shown"
             assert v.description and v.description.split()[0] in html
+
+
+# --- issue 10: what importers need (items 7-9) ------------------------------------------
+
+REPO = Path(__file__).resolve().parents[2]
+
+# The class-k tripod with a sinusoidal load (a phase in rad), gravity and a point mass.
+LOADED_SCENE = CLASS_K_SCENE.replace(
+    "[[bars]]",
+    """gravity = [0.0, 0.0, -9.81]
+
+[[loads]]
+kind = "sinusoidal"
+node = 4
+amplitude = [1.0, 0.0, 0.0]
+frequency = 2.0
+phase = 0.25
+
+[[point_masses]]
+node = 4
+mass = 0.5
+
+[[bars]]""",
+    1,
+)
+
+
+@pytest.fixture
+def loaded(fmus):
+    return fmus.from_toml(LOADED_SCENE)
+
+
+def test_version_license_and_author_from_cargo_toml(builtin):
+    package = tomllib.loads((REPO / "Cargo.toml").read_text())["package"]
+    md = builtin.md
+    assert md.version == package["version"]
+    assert md.license == package["license"] == "MIT OR Apache-2.0"
+    assert md.author and md.copyright
+
+
+def test_generation_tool_names_the_commit(builtin):
+    head = subprocess.run(
+        ["git", "rev-parse", "--short", "HEAD"], cwd=REPO, capture_output=True, text=True, check=True
+    ).stdout.strip()
+    tool = builtin.md.generationTool
+    assert tool.startswith("tensegrity-fmu "), tool
+    assert f"(git {head}" in tool, f"{tool} does not name HEAD {head}"
+
+
+def test_generation_date_from_source_date_epoch(cli, tmp_path):
+    out = tmp_path / "dated.fmu"
+    env = dict(os.environ, SOURCE_DATE_EPOCH="1700000000")
+    subprocess.run([str(cli), "build", "prism2", "-o", str(out)], check=True, env=env, capture_output=True)
+    assert read_model_description(str(out)).generationDateAndTime == "2023-11-14T22:13:20Z"
+    assert validate_fmu(str(out)) == []
+    undated = tmp_path / "now.fmu"
+    env.pop("SOURCE_DATE_EPOCH")
+    subprocess.run([str(cli), "build", "prism2", "-o", str(undated)], check=True, env=env, capture_output=True)
+    stamp = read_model_description(str(undated)).generationDateAndTime
+    built = datetime.datetime.strptime(stamp, "%Y-%m-%dT%H:%M:%SZ").replace(tzinfo=datetime.timezone.utc)
+    age = datetime.datetime.now(datetime.timezone.utc) - built
+    assert datetime.timedelta(0) <= age < datetime.timedelta(minutes=5), stamp
+
+
+def test_rad_unit_has_its_base_unit(loaded):
+    assert validate_fmu(str(loaded.path)) == []
+    units = {u.name: u.baseUnit for u in loaded.md.unitDefinitions}
+    rad = units["rad"]
+    assert (rad.rad, rad.kg, rad.m, rad.s) == (1, 0, 0, 0)
+    assert loaded.variables["load[1].phase"].unit == "rad"
+
+
+def test_solver_method_and_max_steps_are_integer_parameters(builtin, open_fmu):
+    v = builtin.variables
+    method, steps = v["solver.method"], v["solver.max_steps"]
+    assert (method.type, method.causality, method.variability) == ("Integer", "parameter", "fixed")
+    assert (int(method.min), int(method.max)) == (1, 3)
+    assert "1 = rk4" in method.description and "3 = rattle" in method.description
+    assert (steps.type, steps.causality, steps.variability) == ("Integer", "parameter", "tunable")
+    assert int(steps.start) == builtin.scene.get("solver", {}).get("max_steps", 100000)
+    assert int(steps.min) == 1
+    assert not builtin.md.typeDefinitions  # no Enumeration left for libcosim to ignore
+    s = open_fmu(builtin)
+    s.fmu.setupExperiment(startTime=0.0)
+    s.fmu.enterInitializationMode()
+    vrs = s.vrs(["solver.method", "solver.max_steps"])
+    s.fmu.setInteger(vrs, [2, 250])
+    assert s.fmu.getInteger(vrs) == [2, 250]
+    s.fmu.exitInitializationMode()
+    s.step(0.01)
+    assert s.fmu.getInteger(vrs) == [2, 250]
+
+
+def test_max_steps_below_one_is_rejected(builtin, open_fmu):
+    s = open_fmu(builtin)
+    s.fmu.setupExperiment(startTime=0.0)
+    s.fmu.enterInitializationMode()
+    with pytest.raises(Exception):
+        s.fmu.setInteger(s.vrs(["solver.max_steps"]), [0])
+    assert any("solver.max_steps" in m for m in s.errors())
+
+
+TUNABLE_PREFIXES = ("gravity.", "ground.", "load[", "point_mass[", "bar[")
+TUNABLE_NAMES = {"solver.max_steps", "solver.rtol", "solver.atol"}
+FIXED_NAMES = {"solver.step_size", "solver.method", "solver.correction"}
+
+
+def test_tunable_parameters(builtin, loaded):
+    for fmu in (builtin, loaded):
+        for v in fmu.md.modelVariables:
+            if v.causality != "parameter":
+                continue
+            cable_setting = v.name.startswith("cable[") and v.name.split(".")[1] in (
+                "stiffness", "rest_length", "damping")
+            if v.name in FIXED_NAMES:
+                assert v.variability == "fixed", v.name
+            else:
+                assert v.name in TUNABLE_NAMES or v.name.startswith(TUNABLE_PREFIXES) or cable_setting, v.name
+                assert v.variability == "tunable", v.name
+            assert v.initial in (None, "exact"), v.name
+    names = {v.name for v in loaded.md.modelVariables if v.variability == "tunable"}
+    assert {"gravity.z", "load[1].phase", "point_mass[1].mass", "cable[3].damping"} <= names
