@@ -408,3 +408,31 @@ def test_tunable_parameters(builtin, loaded):
             assert v.initial in (None, "exact"), v.name
     names = {v.name for v in loaded.md.modelVariables if v.variability == "tunable"}
     assert {"gravity.z", "load[1].phase", "point_mass[1].mass", "cable[3].damping"} <= names
+
+
+def test_libcosim_sees_and_sets_the_solver_method(fmus):
+    """libcosim (OSP) ignores Enumerations: solver.method must reach it as an Integer."""
+    pytest.importorskip("libcosimpy")
+    from libcosimpy.CosimEnums import CosimVariableType
+    from libcosimpy.CosimExecution import CosimExecution
+    from libcosimpy.CosimObserver import CosimObserver
+    from libcosimpy.CosimSlave import CosimLocalSlave
+
+    fmu = fmus.builtin("prism2")
+    execution = CosimExecution.from_step_size(step_size=10_000_000)  # 10 ms in ns
+    index = execution.add_local_slave(CosimLocalSlave(fmu_path=str(fmu.path), instance_name="p"))
+    integers = {
+        v.name.decode(): v.reference
+        for v in execution.slave_variables(slave_index=index)
+        if v.type == CosimVariableType.INTEGER.value
+    }
+    assert set(integers) == {"solver.method", "solver.max_steps"}
+    assert integers["solver.method"] == fmu.vr["solver.method"]
+    assert execution.integer_initial_value(
+        slave_index=index, variable_reference=integers["solver.method"], value=3
+    )
+    observer = CosimObserver.create_last_value()
+    execution.add_observer(observer=observer)
+    assert execution.simulate_until(target_time=50_000_000)
+    refs = [integers["solver.method"], integers["solver.max_steps"]]
+    assert observer.last_integer_values(slave_index=index, variable_references=refs) == [3, 100000]
