@@ -1,7 +1,7 @@
 //! The single variable table of an FMU, built from the model. It drives get/set in the
 //! instance and the `ModelVariables` of modelDescription.xml, so the two cannot drift.
 //! A variable exists only where the scene calls for it.
-
+//!
 //! A parameter's variability lives in the table too ([`Variable::variability`]): tunable
 //! parameters are [`Variability::Tunable`], and nothing else lists them.
 
