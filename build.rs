@@ -1,6 +1,7 @@
 //! Hashes what makes up the FMU binary (its sources, the locked dependency versions and
 //! the compiler version) into `BUILD_ID`, so that an FMU's GUID changes whenever the
-//! binary does.
+//! binary does, and records the git commit (`TENSEGRITY_GIT_COMMIT`) that
+//! modelDescription.xml names in `generationTool`.
 
 use std::path::Path;
 
@@ -22,7 +23,59 @@ fn hash_dir(dir: &Path, hasher: &mut Sha256) {
     }
 }
 
+/// `git <args>` in the crate's folder, trimmed; `None` when git or the repository is absent.
+/// `--no-optional-locks` keeps `git status` from rewriting the index, which would make
+/// cargo rerun this script on every build.
+fn git(root: &Path, args: &[&str]) -> Option<String> {
+    let out = std::process::Command::new("git")
+        .arg("--no-optional-locks")
+        .arg("-C")
+        .arg(root)
+        .args(args)
+        .output()
+        .ok()?;
+    out.status
+        .success()
+        .then(|| String::from_utf8_lossy(&out.stdout).trim().to_string())
+}
+
+/// The short commit, with `-dirty` when tracked files differ from it; `unknown` without git.
+fn git_commit(root: &Path) -> String {
+    let Some(commit) = git(root, &["rev-parse", "--short", "HEAD"]).filter(|c| !c.is_empty())
+    else {
+        return "unknown".into();
+    };
+    // Rerun when the commit changes; edits to the sources rerun it anyway (watched in
+    // `main`). The index is not watched: `git add` would rebuild the crate each time. The
+    // paths come from git because a worktree keeps them outside `.git/`.
+    let branch = git(root, &["symbolic-ref", "-q", "HEAD"]).unwrap_or_default();
+    for path in ["HEAD", "packed-refs", branch.as_str()] {
+        if path.is_empty() {
+            continue;
+        }
+        if let Some(p) = git(root, &["rev-parse", "--git-path", path]) {
+            let p = root.join(p);
+            if p.exists() {
+                println!("cargo:rerun-if-changed={}", p.display());
+            }
+        }
+    }
+    let dirty = git(root, &["status", "--porcelain", "--untracked-files=no"])
+        .is_some_and(|s| !s.is_empty());
+    if dirty {
+        format!("{commit}-dirty")
+    } else {
+        commit
+    }
+}
+
 fn main() {
+    println!("cargo:rerun-if-changed=build.rs");
+    let root_dir = Path::new(env!("CARGO_MANIFEST_DIR"));
+    println!(
+        "cargo:rustc-env=TENSEGRITY_GIT_COMMIT={}",
+        git_commit(root_dir)
+    );
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
     let mut hasher = Sha256::new();
     hasher.update(env!("CARGO_PKG_VERSION").as_bytes());

@@ -133,7 +133,7 @@ const EFFECTS: &[Effect] = &[
         variables: &[("cable[3].damping", "parameter", Some("N.s/m"))],
         fragments: &[".damping"],
         units: &["N.s/m"],
-        doc: "cables with damping",
+        doc: "1 cable with damping",
     },
     Effect {
         name: "force-density control",
@@ -148,7 +148,7 @@ const EFFECTS: &[Effect] = &[
         variables: &[("cable[1].force_density", "input", Some("N/m"))],
         fragments: &[".force_density"],
         units: &[],
-        doc: "force-density controlled cables",
+        doc: "1 force-density controlled cable (",
     },
     Effect {
         name: "rest-length control",
@@ -159,7 +159,7 @@ const EFFECTS: &[Effect] = &[
         variables: &[("cable[1].rest_length", "input", Some("m"))],
         fragments: &[],
         units: &[],
-        doc: "rest-length controlled cables",
+        doc: "1 rest-length controlled cable (",
     },
     Effect {
         name: "force inputs",
@@ -170,7 +170,7 @@ const EFFECTS: &[Effect] = &[
         ],
         fragments: &[".fx", ".fy", ".fz"],
         units: &[],
-        doc: "force inputs on nodes 4",
+        doc: "force inputs on node 4",
     },
     Effect {
         name: "scripted loads",
@@ -189,7 +189,7 @@ const EFFECTS: &[Effect] = &[
         ],
         fragments: &["load["],
         units: &["Hz", "rad"],
-        doc: "scripted loads",
+        doc: "1 scripted load (",
     },
     Effect {
         name: "pins",
@@ -238,7 +238,7 @@ const EFFECTS: &[Effect] = &[
         variables: &[("point_mass[1].mass", "parameter", Some("kg"))],
         fragments: &["point_mass"],
         units: &[],
-        doc: "point masses",
+        doc: "1 point mass (",
     },
 ];
 

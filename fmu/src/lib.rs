@@ -226,7 +226,7 @@ pub unsafe extern "C" fn fmi2GetInteger(
     call(c, "fmi2GetInteger", |i| {
         let vrs = value_references(i, vr, nvr, "fmi2GetInteger")?;
         let out = slice_mut(value, nvr, "fmi2GetInteger: value")?;
-        i.get_each("fmi2GetInteger", BaseType::Enumeration, vrs, |k, v| {
+        i.get_each("fmi2GetInteger", BaseType::Integer, vrs, |k, v| {
             out[k] = v as fmi2Integer
         })
     })
@@ -285,7 +285,7 @@ pub unsafe extern "C" fn fmi2SetInteger(
     call(c, "fmi2SetInteger", |i| {
         let vrs = value_references(i, vr, nvr, "fmi2SetInteger")?;
         let values = slice(value, nvr, "fmi2SetInteger: value")?;
-        i.set_each("fmi2SetInteger", BaseType::Enumeration, vrs, |k| {
+        i.set_each("fmi2SetInteger", BaseType::Integer, vrs, |k| {
             f64::from(values[k])
         })
     })

@@ -11,6 +11,10 @@
 //!     model_name: "Demo".into(),
 //!     guid: "{0}".into(),
 //!     description: None,
+//!     author: None,
+//!     version: None,
+//!     copyright: None,
+//!     license: None,
 //!     generation_tool: None,
 //!     generation_date_and_time: None,
 //!     co_simulation: CoSimulation { model_identifier: "demo".into(), ..Default::default() },
@@ -52,6 +56,14 @@ pub struct ModelDescription {
     pub guid: String,
     /// `description`.
     pub description: Option<String>,
+    /// `author`.
+    pub author: Option<String>,
+    /// `version`: the model's version.
+    pub version: Option<String>,
+    /// `copyright`.
+    pub copyright: Option<String>,
+    /// `license`.
+    pub license: Option<String>,
     /// `generationTool`.
     pub generation_tool: Option<String>,
     /// `generationDateAndTime`; must be an `xs:dateTime`.
@@ -338,4 +350,35 @@ pub struct Unknown {
     pub index: u32,
     /// `dependencies`: `None` omits the attribute, `Some(vec![])` writes `""`.
     pub dependencies: Option<Vec<u32>>,
+    /// `dependenciesKind`, one per dependency; `None` omits the attribute (meaning
+    /// "dependent" for every dependency).
+    pub dependencies_kind: Option<Vec<DependencyKind>>,
+}
+
+/// How a Known enters an Unknown (`dependenciesKind`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum DependencyKind {
+    /// `dependent`: no particular structure, `f(v)`.
+    Dependent,
+    /// `constant`: a constant factor, `c·v` (Reals only).
+    Constant,
+    /// `fixed`: a factor fixed after initialization, `p·v` (Reals only).
+    Fixed,
+    /// `tunable`: a factor that changes with tunable parameters, `p·v` (Reals only).
+    Tunable,
+    /// `discrete`: a factor that changes at events, `d·v` (Reals only).
+    Discrete,
+}
+
+impl DependencyKind {
+    /// The attribute value.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Self::Dependent => "dependent",
+            Self::Constant => "constant",
+            Self::Fixed => "fixed",
+            Self::Tunable => "tunable",
+            Self::Discrete => "discrete",
+        }
+    }
 }

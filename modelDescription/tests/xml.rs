@@ -58,6 +58,10 @@ fn header_and_root_attributes() {
         "modelName=\"Tensegrity\"",
         "guid=\"{8c4e810f-3df3-4a00-8276-176fa3c9f000}\"",
         "description=",
+        "author=\"A. Author\"",
+        "version=\"1.2.3\"",
+        "copyright=\"© 2026 A. Author\"",
+        "license=\"MIT OR Apache-2.0\"",
         "generationTool=\"fmi2-model-description\"",
         "generationDateAndTime=\"2024-01-01T00:00:00Z\"",
         "variableNamingConvention=\"structured\"",
@@ -162,7 +166,7 @@ fn variables() {
 fn model_structure() {
     let xml = sample().to_xml().unwrap();
     assert!(xml.contains(
-        "<Outputs>\n      <Unknown index=\"1\" dependencies=\"2 11\"/>\n      <Unknown index=\"3\" dependencies=\"\"/>\n    </Outputs>"
+        "<Outputs>\n      <Unknown index=\"1\" dependencies=\"2 11\" dependenciesKind=\"dependent constant\"/>\n      <Unknown index=\"3\" dependencies=\"\"/>\n    </Outputs>"
     ));
     assert!(xml.contains(
         "<InitialUnknowns>\n      <Unknown index=\"3\"/>\n      <Unknown index=\"8\"/>\n    </InitialUnknowns>"
@@ -182,6 +186,10 @@ fn empty_lists_are_omitted() {
         "Derivatives",
         "InitialUnknowns",
         "description=",
+        "author",
+        "\" version=",
+        "copyright",
+        "license",
         "generationTool",
         "generationDateAndTime",
     ] {
@@ -194,7 +202,7 @@ fn empty_lists_are_omitted() {
     let mut md = minimal();
     md.model_structure.derivatives = vec![Unknown {
         index: 1,
-        dependencies: None,
+        ..Default::default()
     }];
     let xml = md.to_xml().unwrap();
     assert!(xml.contains("<ModelStructure>\n    <Derivatives>\n      <Unknown index=\"1\"/>"));

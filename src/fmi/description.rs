@@ -2,10 +2,93 @@
 
 use fmi2_model_description as md;
 
-use super::variables::{BaseType, Binding, GroundField, VariableTable, METHOD_TYPE, UNITS};
+use super::dependencies::model_structure;
+use super::variables::{BaseType, Binding, GroundField, Variable, VariableTable, UNITS};
 use super::Category;
 use crate::integrator::Method;
 use crate::model::Model;
+
+/// Who made the FMU and when: the attributes that vary from build to build.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Provenance {
+    /// The GUID.
+    pub guid: String,
+    /// `generationTool`: tool, version and git commit.
+    pub generation_tool: String,
+    /// `generationDateAndTime`, an `xs:dateTime` in UTC.
+    pub generation_date_and_time: String,
+}
+
+impl Provenance {
+    /// This program, now (or at `SOURCE_DATE_EPOCH`, for reproducible builds).
+    pub fn current(guid: String) -> Self {
+        let seconds = std::env::var("SOURCE_DATE_EPOCH")
+            .ok()
+            .and_then(|s| s.trim().parse::<i64>().ok())
+            .unwrap_or_else(|| {
+                std::time::SystemTime::now()
+                    .duration_since(std::time::UNIX_EPOCH)
+                    .map_or(0, |d| d.as_secs() as i64)
+            });
+        Self {
+            guid,
+            generation_tool: generation_tool(env!("TENSEGRITY_GIT_COMMIT")),
+            generation_date_and_time: iso8601_utc(seconds),
+        }
+    }
+}
+
+/// `generationTool` for a commit: `tensegrity-fmu <version> (git <commit>)`.
+pub fn generation_tool(commit: &str) -> String {
+    format!(
+        "tensegrity-fmu {} (git {commit})",
+        env!("CARGO_PKG_VERSION")
+    )
+}
+
+/// `YYYY-MM-DDThh:mm:ssZ` for seconds since 1970-01-01 UTC.
+pub fn iso8601_utc(seconds: i64) -> String {
+    let (days, rem) = (seconds.div_euclid(86_400), seconds.rem_euclid(86_400));
+    // Civil date from days since the epoch (H. Hinnant's algorithm).
+    let z = days + 719_468;
+    let era = z.div_euclid(146_097);
+    let doe = z.rem_euclid(146_097);
+    let yoe = (doe - doe / 1460 + doe / 36_524 - doe / 146_096) / 365;
+    let doy = doe - (365 * yoe + yoe / 4 - yoe / 100);
+    let mp = (5 * doy + 2) / 153;
+    let day = doy - (153 * mp + 2) / 5 + 1;
+    let month = if mp < 10 { mp + 3 } else { mp - 9 };
+    let year = yoe + era * 400 + i64::from(month <= 2);
+    format!(
+        "{year:04}-{month:02}-{day:02}T{:02}:{:02}:{:02}Z",
+        rem / 3600,
+        rem / 60 % 60,
+        rem % 60
+    )
+}
+
+/// The author named in modelDescription.xml.
+pub const AUTHOR: &str = "the tensegrity-fmu developers";
+
+/// The communication step of `<DefaultExperiment>`: 10 ms, or ten internal steps if
+/// that is longer, so that a default run reports at a useful rate.
+pub fn default_communication_step(model: &Model) -> f64 {
+    (10.0 * model.solver.step_size).max(0.01)
+}
+
+/// Declared `min`/`max` of a parameter, where its value has a bound.
+fn bounds(v: &Variable) -> (Option<f64>, Option<f64>) {
+    match v.binding {
+        Binding::Method => (Some(1.0), Some(Method::ALL.len() as f64)),
+        Binding::MaxSteps => (Some(1.0), Some(f64::from(i32::MAX))),
+        Binding::Ground(GroundField::Height) => (None, None),
+        Binding::Mass(_) | Binding::StepSize | Binding::PointMass(_) | Binding::Ground(_) => {
+            (Some(0.0), None)
+        }
+        _ => (None, None),
+    }
+}
+
 
 /// Longest model identifier: C compilers guarantee 63 significant characters.
 pub const MAX_MODEL_IDENTIFIER: usize = 63;
@@ -26,61 +109,55 @@ pub fn model_identifier(model: &Model) -> String {
     id
 }
 
-/// The model description of an FMU for `model`, with variables from `table`.
-pub fn model_description(model: &Model, table: &VariableTable, guid: &str) -> md::ModelDescription {
-    let variables: Vec<md::ScalarVariable> = table
-        .variables
-        .iter()
-        .map(|v| md::ScalarVariable {
-            name: v.name.clone(),
-            value_reference: v.value_reference,
-            description: Some(v.description.clone()),
-            causality: v.causality,
-            variability: v.variability,
-            initial: v.initial,
-            kind: match v.base_type {
-                BaseType::Real => md::VariableKind::Real {
-                    declared_type: None,
-                    unit: v.unit.map(str::to_string),
-                    start: v.start,
-                    min: matches!(
-                        v.binding,
-                        Binding::Mass(_)
-                            | Binding::StepSize
-                            | Binding::PointMass(_)
-                            | Binding::Ground(_)
-                    )
-                    .then_some(0.0)
-                    .filter(|_| v.binding != Binding::Ground(GroundField::Height)),
-                    max: None,
-                },
-                BaseType::Boolean => md::VariableKind::Boolean {
-                    start: v.start.map(|s| s != 0.0),
-                },
-                BaseType::Enumeration => md::VariableKind::Enumeration {
-                    declared_type: METHOD_TYPE.to_string(),
-                    start: v.start.map(|s| s as i32),
-                },
+fn scalar_variable(v: &Variable) -> md::ScalarVariable {
+    let (min, max) = bounds(v);
+    md::ScalarVariable {
+        name: v.name.clone(),
+        value_reference: v.value_reference,
+        description: Some(v.description.clone()),
+        causality: v.causality,
+        variability: v.variability,
+        initial: v.initial,
+        kind: match v.base_type {
+            BaseType::Real => md::VariableKind::Real {
+                declared_type: None,
+                unit: v.unit.map(str::to_string),
+                start: v.start,
+                min,
+                max,
             },
-        })
-        .collect();
+            BaseType::Boolean => md::VariableKind::Boolean {
+                start: v.start.map(|s| s != 0.0),
+            },
+            BaseType::Integer => md::VariableKind::Integer {
+                declared_type: None,
+                start: v.start.map(|s| s as i32),
+                min: min.map(|m| m as i32),
+                max: max.map(|m| m as i32),
+            },
+        },
+    }
+}
+
+/// The model description of an FMU for `model`, with variables from `table`.
+pub fn model_description(
+    model: &Model,
+    table: &VariableTable,
+    provenance: &Provenance,
+) -> md::ModelDescription {
     // ModelStructure indices are 1-based positions in ModelVariables.
-    let outputs: Vec<md::Unknown> = table
-        .variables
-        .iter()
-        .enumerate()
-        .filter(|(_, v)| matches!(v.binding, Binding::Output(_)))
-        .map(|(i, _)| md::Unknown {
-            index: i as u32 + 1,
-            dependencies: None,
-        })
-        .collect();
+    let (outputs, initial_unknowns) = model_structure(model, table);
+    let step = default_communication_step(model);
     md::ModelDescription {
         model_name: model.scene.name.clone(),
-        guid: guid.to_string(),
+        guid: provenance.guid.clone(),
         description: model.scene.description.clone(),
-        generation_tool: Some(format!("tensegrity-fmu {}", env!("CARGO_PKG_VERSION"))),
-        generation_date_and_time: None,
+        author: Some(AUTHOR.to_string()),
+        version: Some(env!("CARGO_PKG_VERSION").to_string()),
+        copyright: Some(format!("Copyright (c) {AUTHOR}")),
+        license: Some(env!("CARGO_PKG_LICENSE").to_string()),
+        generation_tool: Some(provenance.generation_tool.clone()),
+        generation_date_and_time: Some(provenance.generation_date_and_time.clone()),
         co_simulation: md::CoSimulation {
             model_identifier: model_identifier(model),
             can_handle_variable_communication_step_size: true,
@@ -96,31 +173,19 @@ pub fn model_description(model: &Model, table: &VariableTable, guid: &str) -> md
         unit_definitions: UNITS
             .iter()
             .filter(|(name, _)| table.variables.iter().any(|v| v.unit == Some(*name)))
-            .map(|(name, [kg, m, s])| md::Unit {
+            .map(|(name, [kg, m, s, rad])| md::Unit {
                 name: name.to_string(),
                 base_unit: md::BaseUnit {
                     kg: *kg,
                     m: *m,
                     s: *s,
+                    rad: *rad,
                     ..md::BaseUnit::default()
                 },
             })
             .collect(),
-        type_definitions: vec![md::SimpleType {
-            name: METHOD_TYPE.to_string(),
-            description: Some("integration method".to_string()),
-            kind: md::SimpleTypeKind::Enumeration {
-                items: Method::ALL
-                    .iter()
-                    .enumerate()
-                    .map(|(i, m)| md::EnumerationItem {
-                        name: m.name().to_string(),
-                        value: i as i32 + 1,
-                        description: Some(m.description().to_string()),
-                    })
-                    .collect(),
-            },
-        }],
+        // solver.method is an Integer: importers such as libcosim ignore Enumerations.
+        type_definitions: Vec::new(),
         log_categories: Category::ALL
             .iter()
             .map(|c| md::LogCategory {
@@ -130,15 +195,15 @@ pub fn model_description(model: &Model, table: &VariableTable, guid: &str) -> md
             .collect(),
         default_experiment: Some(md::DefaultExperiment {
             start_time: Some(0.0),
-            stop_time: Some(1.0),
+            stop_time: Some(if step > 0.1 { 10.0 * step } else { 1.0 }),
             tolerance: None,
-            step_size: Some(model.solver.step_size),
+            step_size: Some(step),
         }),
-        model_variables: variables,
+        model_variables: table.variables.iter().map(scalar_variable).collect(),
         model_structure: md::ModelStructure {
-            initial_unknowns: outputs.clone(),
             outputs,
             derivatives: Vec::new(),
+            initial_unknowns,
         },
     }
 }

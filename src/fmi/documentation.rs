@@ -1,6 +1,10 @@
 //! `documentation/index.html`: the structure and every variable with unit and meaning.
 
-use super::variables::VariableTable;
+use fmi2_model_description::Causality;
+
+use super::description::default_communication_step;
+use super::variables::{BaseType, Binding, Variable, VariableTable};
+use crate::integrator::Method;
 use crate::model::{CableLaw, Model};
 
 fn escape(s: &str) -> String {
@@ -8,6 +12,47 @@ fn escape(s: &str) -> String {
         .replace('<', "&lt;")
         .replace('>', "&gt;")
         .replace('"', "&quot;")
+}
+
+/// `n` followed by the singular or plural noun, e.g. `1 point mass`, `2 point masses`.
+pub fn count(n: usize, singular: &str, plural: &str) -> String {
+    format!("{n} {}", if n == 1 { singular } else { plural })
+}
+
+/// A start value as the importer sees it: Booleans by name, `solver.method` as
+/// `1 (rk4)`, Integers without a decimal point.
+fn start_text(v: &Variable) -> String {
+    let Some(s) = v.start else {
+        return String::new();
+    };
+    match (v.base_type, v.binding) {
+        (BaseType::Boolean, _) => (if s != 0.0 { "true" } else { "false" }).to_string(),
+        (BaseType::Integer, Binding::Method) => Method::from_fmi_value(s)
+            .map_or_else(|| format!("{s}"), |m| format!("{s} ({})", m.name())),
+        _ => format!("{s}"),
+    }
+}
+
+fn variable_table(h: &mut String, title: &str, variables: &[&Variable]) {
+    if variables.is_empty() {
+        return;
+    }
+    h.push_str(&format!(
+        "<h3>{title}</h3>\n<table><tr><th>name</th><th>causality</th><th>variability</th><th>type</th><th>unit</th><th>start</th><th>meaning</th></tr>\n"
+    ));
+    for v in variables {
+        h.push_str(&format!(
+            "<tr><td><code>{}</code></td><td>{:?}</td><td>{:?}</td><td>{:?}</td><td>{}</td><td>{}</td><td>{}</td></tr>\n",
+            escape(&v.name),
+            v.causality,
+            v.variability,
+            v.base_type,
+            v.unit.unwrap_or(""),
+            start_text(v),
+            escape(&v.description)
+        ));
+    }
+    h.push_str("</table>\n");
 }
 
 /// The HTML page shipped in the FMU.
@@ -21,6 +66,7 @@ pub fn index_html(model: &Model, table: &VariableTable) -> String {
     if let Some(d) = &scene.description {
         h.push_str(&format!("<p>{}</p>\n", escape(d)));
     }
+    usage(&mut h, model);
     h.push_str("<h2>Structure and effects</h2>\n<ul>");
     for line in effect_lines(model) {
         h.push_str(&format!("<li>{}</li>", escape(&line)));
@@ -31,19 +77,37 @@ pub fn index_html(model: &Model, table: &VariableTable) -> String {
         if model.solver.correction { "on" } else { "off" },
     ));
     h.push_str("<p>Dynamics: Cheong, Skelton &amp; Cho (2014), non-minimal coordinates with the exact recursive bar-length and orthogonality correction after every internal step. Bar forces are positive in compression.</p>\n");
-    h.push_str("<h2>Variables</h2>\n<table><tr><th>name</th><th>causality</th><th>unit</th><th>start</th><th>meaning</th></tr>\n");
-    for v in &table.variables {
-        h.push_str(&format!(
-            "<tr><td><code>{}</code></td><td>{:?}</td><td>{}</td><td>{}</td><td>{}</td></tr>\n",
-            escape(&v.name),
-            v.causality,
-            v.unit.unwrap_or(""),
-            v.start.map_or(String::new(), |s| s.to_string()),
-            escape(&v.description)
-        ));
-    }
-    h.push_str("</table>\n</body></html>\n");
+    h.push_str("<h2>Variables</h2>\n");
+    let of = |c: Causality| -> Vec<&Variable> {
+        table
+            .variables
+            .iter()
+            .filter(|v| v.causality == c)
+            .collect()
+    };
+    variable_table(&mut h, "Inputs", &of(Causality::Input));
+    variable_table(&mut h, "Outputs", &of(Causality::Output));
+    h.push_str("<p>Tunable parameters may be changed between communication steps; fixed ones only before the end of initialization.</p>\n");
+    variable_table(&mut h, "Parameters", &of(Causality::Parameter));
+    h.push_str("</body></html>\n");
     h
+}
+
+/// How to run the FMU, and what an importer must know about inputs.
+fn usage(h: &mut String, model: &Model) {
+    let file = format!("{}.fmu", escape(&model.scene.name));
+    let step = default_communication_step(model);
+    h.push_str("<h2>Usage</h2>\n<p>With <a href=\"https://github.com/CATIA-Systems/FMPy\">fmpy</a>:</p>\n<pre><code>");
+    h.push_str(&format!(
+        "from fmpy import simulate_fmu\nresult = simulate_fmu(\"{file}\", stop_time=1.0, output_interval={step})\nprint(result.dtype.names, result[-1])"
+    ));
+    h.push_str("</code></pre>\n");
+    h.push_str(&format!(
+        "<p>Parameters are set with <code>start_values={{\"name\": value}}</code> and inputs with <code>input=</code>. \
+         Input values are held constant over each communication step (the FMU does not interpolate inputs); \
+         <code>fmi2DoStep</code> integrates the step in internal steps of <code>solver.step_size</code> \
+         and the outputs are those at its end. The default experiment reports every {step} s.</p>\n"
+    ));
 }
 
 /// One line per effect the scene declares, none for an absent one.
@@ -56,12 +120,17 @@ fn effect_lines(model: &Model) -> Vec<String> {
             .join(", ")
     };
     let mut lines = vec![format!(
-        "{} nodes (numbered from 1), {} rigid bars",
-        model.n_nodes(),
-        model.bars.len()
+        "{} (numbered from 1), {}",
+        count(model.n_nodes(), "node", "nodes"),
+        count(model.bars.len(), "rigid bar", "rigid bars")
     )];
     if !scene.fixed.is_empty() {
-        lines.push(format!("pinned nodes: {}", list(&scene.fixed)));
+        let nodes = if scene.fixed.len() == 1 {
+            "node"
+        } else {
+            "nodes"
+        };
+        lines.push(format!("pinned {nodes}: {}", list(&scene.fixed)));
     }
     let mut ends = vec![0usize; model.n_nodes()];
     for b in &model.bars {
@@ -71,12 +140,13 @@ fn effect_lines(model: &Model) -> Vec<String> {
     let joints = ends.iter().filter(|&&k| k > 1).count();
     if joints > 0 {
         lines.push(format!(
-            "{joints} class-k joints (nodes shared by bars), class {}",
+            "{} (nodes shared by bars), class {}",
+            count(joints, "class-k joint", "class-k joints"),
             ends.iter().max().copied().unwrap_or(1)
         ));
     }
-    let count = |f: fn(&CableLaw) -> bool| model.cables.iter().filter(|c| f(&c.law)).count();
-    let elastic = count(|l| matches!(l, CableLaw::Elastic { .. }));
+    let cables_where = |f: fn(&CableLaw) -> bool| model.cables.iter().filter(|c| f(&c.law)).count();
+    let elastic = cables_where(|l| matches!(l, CableLaw::Elastic { .. }));
     let damped = model
         .cables
         .iter()
@@ -94,35 +164,49 @@ fn effect_lines(model: &Model) -> Vec<String> {
         })
         .count();
     if elastic > 0 {
-        lines.push(format!("{elastic} elastic cables"));
+        lines.push(count(elastic, "elastic cable", "elastic cables"));
     }
     if damped > 0 {
         lines.push(format!(
-            "{damped} cables with damping on the extension rate (while taut)"
+            "{} on the extension rate (while taut)",
+            count(damped, "cable with damping", "cables with damping")
         ));
     }
     if !model.controlled.is_empty() {
         lines.push(format!(
-            "{} force-density controlled cables (inputs cable[j].force_density)",
-            model.controlled.len()
+            "{} (inputs cable[j].force_density)",
+            count(
+                model.controlled.len(),
+                "force-density controlled cable",
+                "force-density controlled cables"
+            )
         ));
     }
     if !model.reeled.is_empty() {
         lines.push(format!(
-            "{} rest-length controlled cables (inputs cable[j].rest_length)",
-            model.reeled.len()
+            "{} (inputs cable[j].rest_length)",
+            count(
+                model.reeled.len(),
+                "rest-length controlled cable",
+                "rest-length controlled cables"
+            )
         ));
     }
     if !scene.force_inputs.is_empty() {
+        let nodes = if scene.force_inputs.len() == 1 {
+            "node"
+        } else {
+            "nodes"
+        };
         lines.push(format!(
-            "force inputs on nodes {}",
+            "force inputs on {nodes} {}",
             list(&scene.force_inputs)
         ));
     }
     if !scene.loads.is_empty() {
         lines.push(format!(
-            "{} scripted loads (parameters load[k].*), evaluated at the internal stage times",
-            scene.loads.len()
+            "{} (parameters load[k].*), evaluated at the internal stage times",
+            count(scene.loads.len(), "scripted load", "scripted loads")
         ));
     }
     if let Some(g) = model.gravity {
@@ -130,14 +214,15 @@ fn effect_lines(model: &Model) -> Vec<String> {
     }
     if !scene.point_masses.is_empty() {
         lines.push(format!(
-            "{} point masses (parameters point_mass[k].mass)",
-            scene.point_masses.len()
+            "{} (parameters point_mass[k].mass)",
+            count(scene.point_masses.len(), "point mass", "point masses")
         ));
     }
     if let Some(g) = &model.ground {
         lines.push(format!(
-            "ground plane n·x = {} m with n = [{:.4}, {:.4}, {:.4}]: penalty contact (k = {} N/m, c = {} N·s/m) and Coulomb friction μ = {} at {} bar-end nodes",
-            g.height, g.normal.x, g.normal.y, g.normal.z, g.stiffness, g.damping, g.friction, g.nodes.len()
+            "ground plane n·x = {} m with n = [{:.4}, {:.4}, {:.4}]: penalty contact (k = {} N/m, c = {} N·s/m) and Coulomb friction μ = {} at {}",
+            g.height, g.normal.x, g.normal.y, g.normal.z, g.stiffness, g.damping, g.friction,
+            count(g.nodes.len(), "bar-end node", "bar-end nodes")
         ));
     }
     lines

@@ -3,6 +3,7 @@
 //! The `extern "C"` functions live in the `fmu/` crate and only call into this module.
 
 mod access;
+pub mod dependencies;
 pub mod description;
 pub mod documentation;
 pub mod instance;

@@ -6,7 +6,9 @@ use std::path::Path;
 
 use zip::write::SimpleFileOptions;
 
-use super::description::{model_description, model_identifier};
+use super::description::{
+    generation_tool, iso8601_utc, model_description, model_identifier, Provenance,
+};
 use super::documentation::index_html;
 use super::variables::VariableTable;
 use super::{guid_for, BUILD_ID};
@@ -29,13 +31,23 @@ pub struct Built {
 /// binary, so it changes with every code change).
 pub const GOLDEN_GUID: &str = "{00000000-0000-0000-0000-000000000000}";
 
-/// modelDescription.xml of `scene` as packaged, but with [`GOLDEN_GUID`]: the golden
+/// The provenance of the golden files: [`GOLDEN_GUID`], commit `0000000` and the epoch,
+/// in place of what varies from build to build.
+pub fn golden_provenance() -> Provenance {
+    Provenance {
+        guid: GOLDEN_GUID.to_string(),
+        generation_tool: generation_tool("0000000"),
+        generation_date_and_time: iso8601_utc(0),
+    }
+}
+
+/// modelDescription.xml of `scene` as packaged, but with [`golden_provenance`]: the golden
 /// files under `modelDescription/` hold this text for each shipped scene.
 pub fn golden_model_description(scene: &Scene) -> Result<String, String> {
     let model = Model::new(scene).map_err(|e| e.to_string())?;
     let sim = Simulation::new(model);
     let table = VariableTable::new(&sim);
-    model_description(sim.model(), &table, GOLDEN_GUID)
+    model_description(sim.model(), &table, &golden_provenance())
         .to_xml()
         .map_err(|e| format!("modelDescription.xml: {e}"))
 }
@@ -50,7 +62,7 @@ pub fn build_fmu(scene: &Scene, binary: &Path, out: &Path) -> Result<Built, Stri
     }
     let table = VariableTable::new(&sim);
     let guid = guid_for(&scene_text);
-    let description = model_description(sim.model(), &table, &guid);
+    let description = model_description(sim.model(), &table, &Provenance::current(guid.clone()));
     let xml = description
         .to_xml()
         .map_err(|e| format!("modelDescription.xml: {e}"))?;

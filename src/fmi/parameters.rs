@@ -11,6 +11,7 @@ pub(super) fn read_parameter(scene: &Scene, binding: Binding) -> f64 {
         Binding::StepSize => scene.solver.step_size,
         Binding::Correction => f64::from(u8::from(scene.solver.correction)),
         Binding::Method => f64::from(scene.solver.method.fmi_value()),
+        Binding::MaxSteps => scene.solver.max_steps as f64,
         Binding::Rtol => scene.solver.rtol,
         Binding::Atol => scene.solver.atol,
         Binding::Stiffness(j) => scene.cables[j].stiffness.unwrap_or(0.0),
@@ -43,6 +44,8 @@ pub(super) fn apply_parameter(scene: &mut Scene, binding: Binding, value: f64) {
                 scene.solver.method = m;
             }
         }
+        // A negative or fractional value cannot come from fmi2SetInteger; 0 fails validation.
+        Binding::MaxSteps => scene.solver.max_steps = value.max(0.0) as u64,
         Binding::Rtol => scene.solver.rtol = value,
         Binding::Atol => scene.solver.atol = value,
         Binding::Stiffness(j) => scene.cables[j].stiffness = Some(value),

@@ -246,6 +246,7 @@ def expected_variables(scene):
     out["solver.step_size"] = ("parameter", "s")
     out["solver.correction"] = ("parameter", None)
     out["solver.method"] = ("parameter", None)
+    out["solver.max_steps"] = ("parameter", None)
     out["solver.rtol"] = ("parameter", None)
     out["solver.atol"] = ("parameter", None)
     # the effects

@@ -1,9 +1,13 @@
 """modelDescription.xml, the archive and the documentation of the built FMUs (issue 3, items 5-7)."""
 
+import datetime
 import math
+import os
 import subprocess
+import tomllib
 import xml.etree.ElementTree as ET
 import zipfile
+from pathlib import Path
 
 import pytest
 from fmpy import read_model_description
@@ -151,7 +155,7 @@ def test_builtin_parameter_starts_match_scene(builtin):
     assert float(v["solver.step_size"].start) == solver.get("step_size", 0.001)
     assert v["solver.correction"].start == str(solver.get("correction", True)).lower()
     methods = {"rk4": 1, "dopri5": 2, "rattle": 3}
-    assert v["solver.method"].type == "Enumeration"
+    assert v["solver.method"].type == "Integer"
     assert int(v["solver.method"].start) == methods[solver.get("method", "rk4")]
     assert float(v["solver.rtol"].start) == solver.get("rtol", 1e-6)
     assert float(v["solver.atol"].start) == solver.get("atol", 1e-9)
@@ -207,7 +211,9 @@ def test_default_experiment_present(builtin):
     assert de is not None
     start, stop, step = float(de.startTime), float(de.stopTime), float(de.stepSize)
     assert start == 0.0 and stop > start
-    assert step == builtin.scene.get("solver", {}).get("step_size", 0.001)
+    # A communication step of 10 ms, or ten internal steps if that is longer.
+    assert step == max(0.01, 10 * builtin.scene.get("solver", {}).get("step_size", 0.001))
+    assert stop == 1.0
 
 
 def test_co_simulation_capabilities(builtin):
@@ -280,3 +286,153 @@ def test_documentation_lists_every_variable_with_unit(builtin, classk):
             if v.unit:
                 assert v.unit in rows[v.name], f"{v.name}: unit {v.unit} not shown"
             assert v.description and v.description.split()[0] in html
+
+
+# --- issue 10: what importers need (items 7-9) ------------------------------------------
+
+REPO = Path(__file__).resolve().parents[2]
+
+# The class-k tripod with a sinusoidal load (a phase in rad), gravity and a point mass.
+LOADED_SCENE = CLASS_K_SCENE.replace(
+    "[[bars]]",
+    """gravity = [0.0, 0.0, -9.81]
+
+[[loads]]
+kind = "sinusoidal"
+node = 4
+amplitude = [1.0, 0.0, 0.0]
+frequency = 2.0
+phase = 0.25
+
+[[point_masses]]
+node = 4
+mass = 0.5
+
+[[bars]]""",
+    1,
+)
+
+
+@pytest.fixture
+def loaded(fmus):
+    return fmus.from_toml(LOADED_SCENE)
+
+
+def test_version_license_and_author_from_cargo_toml(builtin):
+    package = tomllib.loads((REPO / "Cargo.toml").read_text())["package"]
+    md = builtin.md
+    assert md.version == package["version"]
+    assert md.license == package["license"] == "MIT OR Apache-2.0"
+    assert md.author and md.copyright
+
+
+def test_generation_tool_names_the_commit(builtin):
+    head = subprocess.run(
+        ["git", "rev-parse", "--short", "HEAD"], cwd=REPO, capture_output=True, text=True, check=True
+    ).stdout.strip()
+    tool = builtin.md.generationTool
+    assert tool.startswith("tensegrity-fmu "), tool
+    assert f"(git {head}" in tool, f"{tool} does not name HEAD {head}"
+
+
+def test_generation_date_from_source_date_epoch(cli, tmp_path):
+    out = tmp_path / "dated.fmu"
+    env = dict(os.environ, SOURCE_DATE_EPOCH="1700000000")
+    subprocess.run([str(cli), "build", "prism2", "-o", str(out)], check=True, env=env, capture_output=True)
+    assert read_model_description(str(out)).generationDateAndTime == "2023-11-14T22:13:20Z"
+    assert validate_fmu(str(out)) == []
+    undated = tmp_path / "now.fmu"
+    env.pop("SOURCE_DATE_EPOCH")
+    subprocess.run([str(cli), "build", "prism2", "-o", str(undated)], check=True, env=env, capture_output=True)
+    stamp = read_model_description(str(undated)).generationDateAndTime
+    built = datetime.datetime.strptime(stamp, "%Y-%m-%dT%H:%M:%SZ").replace(tzinfo=datetime.timezone.utc)
+    age = datetime.datetime.now(datetime.timezone.utc) - built
+    assert datetime.timedelta(0) <= age < datetime.timedelta(minutes=5), stamp
+
+
+def test_rad_unit_has_its_base_unit(loaded):
+    assert validate_fmu(str(loaded.path)) == []
+    units = {u.name: u.baseUnit for u in loaded.md.unitDefinitions}
+    rad = units["rad"]
+    assert (rad.rad, rad.kg, rad.m, rad.s) == (1, 0, 0, 0)
+    assert loaded.variables["load[1].phase"].unit == "rad"
+
+
+def test_solver_method_and_max_steps_are_integer_parameters(builtin, open_fmu):
+    v = builtin.variables
+    method, steps = v["solver.method"], v["solver.max_steps"]
+    assert (method.type, method.causality, method.variability) == ("Integer", "parameter", "fixed")
+    assert (int(method.min), int(method.max)) == (1, 3)
+    assert "1 = rk4" in method.description and "3 = rattle" in method.description
+    assert (steps.type, steps.causality, steps.variability) == ("Integer", "parameter", "tunable")
+    assert int(steps.start) == builtin.scene.get("solver", {}).get("max_steps", 100000)
+    assert int(steps.min) == 1
+    assert not builtin.md.typeDefinitions  # no Enumeration left for libcosim to ignore
+    s = open_fmu(builtin)
+    s.fmu.setupExperiment(startTime=0.0)
+    s.fmu.enterInitializationMode()
+    vrs = s.vrs(["solver.method", "solver.max_steps"])
+    s.fmu.setInteger(vrs, [2, 250])
+    assert s.fmu.getInteger(vrs) == [2, 250]
+    s.fmu.exitInitializationMode()
+    s.step(0.01)
+    assert s.fmu.getInteger(vrs) == [2, 250]
+
+
+def test_max_steps_below_one_is_rejected(builtin, open_fmu):
+    s = open_fmu(builtin)
+    s.fmu.setupExperiment(startTime=0.0)
+    s.fmu.enterInitializationMode()
+    with pytest.raises(Exception):
+        s.fmu.setInteger(s.vrs(["solver.max_steps"]), [0])
+    assert any("solver.max_steps" in m for m in s.errors())
+
+
+TUNABLE_PREFIXES = ("gravity.", "ground.", "load[", "point_mass[", "bar[")
+TUNABLE_NAMES = {"solver.max_steps", "solver.rtol", "solver.atol"}
+FIXED_NAMES = {"solver.step_size", "solver.method", "solver.correction"}
+
+
+def test_tunable_parameters(builtin, loaded):
+    for fmu in (builtin, loaded):
+        for v in fmu.md.modelVariables:
+            if v.causality != "parameter":
+                continue
+            cable_setting = v.name.startswith("cable[") and v.name.split(".")[1] in (
+                "stiffness", "rest_length", "damping")
+            if v.name in FIXED_NAMES:
+                assert v.variability == "fixed", v.name
+            else:
+                assert v.name in TUNABLE_NAMES or v.name.startswith(TUNABLE_PREFIXES) or cable_setting, v.name
+                assert v.variability == "tunable", v.name
+            assert v.initial in (None, "exact"), v.name
+    names = {v.name for v in loaded.md.modelVariables if v.variability == "tunable"}
+    assert {"gravity.z", "load[1].phase", "point_mass[1].mass", "cable[3].damping"} <= names
+
+
+def test_libcosim_sees_and_sets_the_solver_method(fmus):
+    """libcosim (OSP) ignores Enumerations: solver.method must reach it as an Integer."""
+    pytest.importorskip("libcosimpy")
+    from libcosimpy.CosimEnums import CosimVariableType
+    from libcosimpy.CosimExecution import CosimExecution
+    from libcosimpy.CosimObserver import CosimObserver
+    from libcosimpy.CosimSlave import CosimLocalSlave
+
+    fmu = fmus.builtin("prism2")
+    execution = CosimExecution.from_step_size(step_size=10_000_000)  # 10 ms in ns
+    index = execution.add_local_slave(CosimLocalSlave(fmu_path=str(fmu.path), instance_name="p"))
+    integers = {
+        v.name.decode(): v.reference
+        for v in execution.slave_variables(slave_index=index)
+        if v.type == CosimVariableType.INTEGER.value
+    }
+    assert set(integers) == {"solver.method", "solver.max_steps"}
+    assert integers["solver.method"] == fmu.vr["solver.method"]
+    assert execution.integer_initial_value(
+        slave_index=index, variable_reference=integers["solver.method"], value=3
+    )
+    observer = CosimObserver.create_last_value()
+    execution.add_observer(observer=observer)
+    assert execution.simulate_until(target_time=50_000_000)
+    refs = [integers["solver.method"], integers["solver.max_steps"]]
+    assert observer.last_integer_values(slave_index=index, variable_references=refs) == [3, 100000]

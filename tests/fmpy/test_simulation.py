@@ -53,10 +53,10 @@ def test_force_density_start_values_give_the_initial_tensions(fmus, open_fmu):
         assert s.get([f"cable[{j}].tension"])[0] == pytest.approx(start * np.linalg.norm(b - a), rel=1e-12)
 
 
-def run_cli_csv(cli, scene, stop, tmp_path):
+def run_cli_csv(cli, scene, stop, tmp_path, interval):
     out = tmp_path / "cli.csv"
     subprocess.run(
-        [str(cli), "simulate", scene, "--time", str(stop), "-o", str(out)],
+        [str(cli), "simulate", scene, "--time", str(stop), "--interval", repr(interval), "-o", str(out)],
         check=True,
         capture_output=True,
     )
@@ -77,7 +77,7 @@ def test_simulate_fmu_reproduces_cli_simulate_csv(fmus, cli, tmp_path, scene):
     else:
         fmu, scene_arg, stop = fmus.builtin(scene), scene, 1.0
     step = float(fmu.md.defaultExperiment.stepSize)
-    csv = run_cli_csv(cli, scene_arg, stop, tmp_path)
+    csv = run_cli_csv(cli, scene_arg, stop, tmp_path, step)
     res = simulate_fmu(str(fmu.path), stop_time=stop, output_interval=step)
     assert len(res) == len(csv)
     assert np.max(np.abs(res["time"] - csv["time"])) <= 1e-12

@@ -65,6 +65,14 @@ struct Root<'a> {
     guid: &'a str,
     #[serde(rename = "@description", skip_serializing_if = "Option::is_none")]
     description: Option<&'a str>,
+    #[serde(rename = "@author", skip_serializing_if = "Option::is_none")]
+    author: Option<&'a str>,
+    #[serde(rename = "@version", skip_serializing_if = "Option::is_none")]
+    version: Option<&'a str>,
+    #[serde(rename = "@copyright", skip_serializing_if = "Option::is_none")]
+    copyright: Option<&'a str>,
+    #[serde(rename = "@license", skip_serializing_if = "Option::is_none")]
+    license: Option<&'a str>,
     #[serde(rename = "@generationTool", skip_serializing_if = "Option::is_none")]
     generation_tool: Option<&'a str>,
     #[serde(
@@ -102,6 +110,10 @@ impl<'a> From<&'a ModelDescription> for Root<'a> {
             model_name: &md.model_name,
             guid: &md.guid,
             description: md.description.as_deref(),
+            author: md.author.as_deref(),
+            version: md.version.as_deref(),
+            copyright: md.copyright.as_deref(),
+            license: md.license.as_deref(),
             generation_tool: md.generation_tool.as_deref(),
             generation_date_and_time: md.generation_date_and_time.as_deref(),
             variable_naming_convention: "structured",
@@ -337,6 +349,8 @@ struct WireUnknown {
     index: u32,
     #[serde(rename = "@dependencies", skip_serializing_if = "Option::is_none")]
     dependencies: Option<String>,
+    #[serde(rename = "@dependenciesKind", skip_serializing_if = "Option::is_none")]
+    dependencies_kind: Option<String>,
 }
 
 fn unknowns(list: &[Unknown]) -> Option<Unknowns> {
@@ -348,6 +362,10 @@ fn unknowns(list: &[Unknown]) -> Option<Unknowns> {
                 .dependencies
                 .as_ref()
                 .map(|d| d.iter().map(u32::to_string).collect::<Vec<_>>().join(" ")),
+            dependencies_kind: u
+                .dependencies_kind
+                .as_ref()
+                .map(|d| d.iter().map(|k| k.as_str()).collect::<Vec<_>>().join(" ")),
         })
         .collect();
     non_empty(unknowns, |unknowns| Unknowns { unknowns })

@@ -63,6 +63,10 @@ pub fn minimal() -> ModelDescription {
         model_name: "Empty".into(),
         guid: "{0}".into(),
         description: None,
+        author: None,
+        version: None,
+        copyright: None,
+        license: None,
         generation_tool: None,
         generation_date_and_time: None,
         co_simulation: CoSimulation {
@@ -167,6 +171,10 @@ pub fn sample() -> ModelDescription {
         model_name: "Tensegrity".into(),
         guid: "{8c4e810f-3df3-4a00-8276-176fa3c9f000}".into(),
         description: Some(TRICKY.into()),
+        author: Some("A. Author".into()),
+        version: Some("1.2.3".into()),
+        copyright: Some("© 2026 A. Author".into()),
+        license: Some("MIT OR Apache-2.0".into()),
         generation_tool: Some("fmi2-model-description".into()),
         generation_date_and_time: Some("2024-01-01T00:00:00Z".into()),
         co_simulation: CoSimulation {
@@ -261,10 +269,15 @@ pub fn sample() -> ModelDescription {
                 Unknown {
                     index: 1,
                     dependencies: Some(vec![2, 11]),
+                    dependencies_kind: Some(vec![
+                        DependencyKind::Dependent,
+                        DependencyKind::Constant,
+                    ]),
                 },
                 Unknown {
                     index: 3,
                     dependencies: Some(vec![]),
+                    dependencies_kind: None,
                 },
             ],
             derivatives: vec![],
@@ -272,10 +285,12 @@ pub fn sample() -> ModelDescription {
                 Unknown {
                     index: 3,
                     dependencies: None,
+                    dependencies_kind: None,
                 },
                 Unknown {
                     index: 8,
                     dependencies: None,
+                    dependencies_kind: None,
                 },
             ],
         },
