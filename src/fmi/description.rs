@@ -89,7 +89,6 @@ fn bounds(v: &Variable) -> (Option<f64>, Option<f64>) {
     }
 }
 
-
 /// Longest model identifier: C compilers guarantee 63 significant characters.
 pub const MAX_MODEL_IDENTIFIER: usize = 63;
 

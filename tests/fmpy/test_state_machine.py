@@ -136,11 +136,11 @@ def test_get_real_before_initialization_is_an_error(prism2, open_fmu):
         s.get(["node[7].x"])
 
 
-def test_set_parameter_after_initialization_is_an_error(prism2, open_fmu):
+def test_set_fixed_parameter_after_initialization_is_an_error(prism2, open_fmu):
     s = open_fmu(prism2).init()
     with pytest.raises(FMICallException):
-        s.set({"bar[1].mass": 2.0})
-    assert any("bar[1].mass" in m for m in s.errors())
+        s.set({"solver.step_size": 2e-3})
+    assert any("solver.step_size is a fixed parameter" in m for m in s.errors())
     with pytest.raises(FMICallException):
         s.fmu.setBoolean(s.vrs(["solver.correction"]), [0])
 
