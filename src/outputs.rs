@@ -213,11 +213,37 @@ pub fn write_header(w: &mut impl Write, table: &[Output]) -> std::io::Result<()>
     writeln!(w)
 }
 
-/// Writes one CSV row for the current state.
+/// Writes one CSV row for the current state: the time, then each output, as
+/// [`write_number`] writes them. Allocates nothing (the digits are formatted on the stack),
+/// so a buffered writer makes a row a few copies into its buffer.
 pub fn write_row(w: &mut impl Write, table: &[Output], sim: &Simulation) -> std::io::Result<()> {
-    write!(w, "{}", sim.time())?;
+    let mut digits = ryu::Buffer::new();
+    w.write_all(number(&mut digits, sim.time()).as_bytes())?;
     for o in table {
-        write!(w, ",{:e}", o.quantity.value(sim))?;
+        w.write_all(b",")?;
+        w.write_all(number(&mut digits, o.quantity.value(sim)).as_bytes())?;
     }
-    writeln!(w)
+    w.write_all(b"\n")
+}
+
+/// Writes a number as people write it: the shortest decimal that reads back as the same
+/// `f64` (`0`, `0.5773502691896258`, `-12.5`, `1e-7`, `1.5e20`), `NaN`, `inf` or `-inf`.
+pub fn write_number(w: &mut impl Write, x: f64) -> std::io::Result<()> {
+    w.write_all(number(&mut ryu::Buffer::new(), x).as_bytes())
+}
+
+/// The text of [`write_number`], formatted in `digits`.
+pub fn number(digits: &mut ryu::Buffer, x: f64) -> &str {
+    if !x.is_finite() {
+        return if x.is_nan() {
+            "NaN"
+        } else if x > 0.0 {
+            "inf"
+        } else {
+            "-inf"
+        };
+    }
+    // Ryū prints integers as `12.0` and large or small magnitudes as `1e-7`, `1.5e20`.
+    let s = digits.format_finite(x);
+    s.strip_suffix(".0").unwrap_or(s)
 }
