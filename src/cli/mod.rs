@@ -158,12 +158,7 @@ pub fn run(cli: Cli) -> Result<(), String> {
             Ok(())
         }
         Command::Scene { name: Some(name) } => {
-            let s = scene::generate(&name).ok_or_else(|| {
-                format!(
-                    "unknown built-in scene '{name}'; known: {}",
-                    scene::builtin_names().join(", ")
-                )
-            })?;
+            let s = scene::generate(&name).ok_or_else(|| scene::unknown_builtin(&name))?;
             print!("{}", s.to_toml_string());
             Ok(())
         }
