@@ -1,6 +1,7 @@
 //! Command-line front end. Each subcommand is a thin layer over the library.
 
 mod bench;
+mod bench_csv;
 mod bench_effects;
 mod inputs;
 mod report;
@@ -103,6 +104,16 @@ enum Command {
 /// Benchmarks beyond the default scaling one.
 #[derive(Subcommand, Debug)]
 enum BenchCommand {
+    /// µs per CSV row of `simulate` next to µs per tower20 step, with the ratio (and the
+    /// row as it was written before, for comparison).
+    Csv {
+        /// Wall time per measured quantity, s, shared among its repeats.
+        #[arg(long, default_value_t = 1.0)]
+        seconds: f64,
+        /// Measurements per quantity, interleaved; the best is printed.
+        #[arg(long, default_value_t = 10)]
+        repeats: usize,
+    },
     /// µs per step of tower20 with only the base effects (elastic cables, pins, joints),
     /// with every optional effect declared at zero, and with them active.
     Effects {
@@ -162,6 +173,10 @@ pub fn run(cli: Cli) -> Result<(), String> {
             print!("{}", s.to_toml_string());
             Ok(())
         }
+        Command::Bench {
+            what: Some(BenchCommand::Csv { seconds, repeats }),
+            ..
+        } => bench_csv::run(seconds, repeats),
         Command::Bench {
             what: Some(BenchCommand::Effects { seconds, repeats }),
             ..

@@ -78,8 +78,9 @@ pub fn simulate(scene: Scene, request: Request) -> Result<(), String> {
     let io = |e: std::io::Error| format!("writing {}: {e}", path.display());
     let mut w = BufWriter::new(partial.file.take().expect("just created"));
     outputs::write_header(&mut w, &table).map_err(io)?;
+    let mut rows = outputs::RowWriter::new();
     run(&mut sim, inputs.as_ref(), time, interval, |sim| {
-        outputs::write_row(&mut w, &table, sim).map_err(io)
+        rows.write_row(&mut w, &table, sim).map_err(io)
     })?;
     drop(w.into_inner().map_err(|e| io(e.into_error()))?);
     partial.commit()?;
