@@ -54,6 +54,7 @@ impl InputTable {
         } else {
             format!("the inputs of this scene are {}", inputs.join(", "))
         };
+        let text = text.strip_prefix('\u{feff}').unwrap_or(text);
         let mut lines = text
             .lines()
             .enumerate()
