@@ -214,17 +214,22 @@ pub fn write_header(w: &mut impl Write, table: &[Output]) -> std::io::Result<()>
 }
 
 /// Writes CSV rows: the time, then each output, as [`write_number`] writes them. A row is
-/// formatted into a buffer kept between rows (no allocation once it has grown to a row's
-/// length) and handed to the writer in one piece.
-#[derive(Debug, Default)]
+/// formatted into a buffer sized once for the longest possible row of its table, so
+/// writing rows allocates nothing, and handed to the writer in one piece.
+#[derive(Debug)]
 pub struct RowWriter {
     line: Vec<u8>,
 }
 
+/// Longest text of one value: `-2.2250738585072014e-308` and a comma.
+const MAX_CELL: usize = 25;
+
 impl RowWriter {
-    /// A writer with an empty buffer.
-    pub fn new() -> Self {
-        Self::default()
+    /// A writer for rows of `table`.
+    pub fn new(table: &[Output]) -> Self {
+        Self {
+            line: Vec::with_capacity(MAX_CELL * (table.len() + 1) + 1),
+        }
     }
 
     /// Writes one row for the current state of `sim` (whose outputs are fresh).

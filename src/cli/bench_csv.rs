@@ -74,7 +74,7 @@ fn measure(
 ) -> Result<[f64; 4], String> {
     let io = |e: std::io::Error| format!("writing the benchmark file: {e}");
     let mut best = [f64::INFINITY; 4];
-    let mut rows = RowWriter::new();
+    let mut rows = RowWriter::new(table);
     let budget = seconds / repeats as f64;
     for _ in 0..repeats {
         let us = timed(budget, 10, |n| {

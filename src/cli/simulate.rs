@@ -78,7 +78,7 @@ pub fn simulate(scene: Scene, request: Request) -> Result<(), String> {
     let io = |e: std::io::Error| format!("writing {}: {e}", path.display());
     let mut w = BufWriter::new(partial.file.take().expect("just created"));
     outputs::write_header(&mut w, &table).map_err(io)?;
-    let mut rows = outputs::RowWriter::new();
+    let mut rows = outputs::RowWriter::new(&table);
     run(&mut sim, inputs.as_ref(), time, interval, |sim| {
         rows.write_row(&mut w, &table, sim).map_err(io)
     })?;
