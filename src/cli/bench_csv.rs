@@ -9,6 +9,7 @@
 //!   the disk's speed is not what is measured;
 //! - a row as it was written before: `write!(w, ",{:e}", value)` per value into the same
 //!   kind of writer (kept here only to show the difference);
+//! - reading the row's values alone (what is left of a row without the formatting);
 //! - the `refresh` before each row (one evaluation at the row's state, so that tensions,
 //!   bar forces and reactions belong to it; the FMU does the same before returning
 //!   outputs).
@@ -39,7 +40,7 @@ pub fn run(seconds: f64, repeats: usize) -> Result<(), String> {
     sim.refresh();
     let table = outputs::outputs(&sim);
     let mut w = BufWriter::new(std::io::sink());
-    let [step, row, old, refresh] = measure(&mut sim, &table, &mut w, seconds, repeats)?;
+    let [step, row, old, refresh, values] = measure(&mut sim, &table, &mut w, seconds, repeats)?;
     println!(
         "tower20 ({} columns), best of {repeats} interleaved measurements of ≥ {} s each:\n",
         table.len() + 1,
@@ -54,6 +55,10 @@ pub fn run(seconds: f64, repeats: usize) -> Result<(), String> {
             row,
         ),
         (
+            "of which reading the values (the rest is formatting)",
+            values,
+        ),
+        (
             "CSV row as before: `write!(w, \",{:e}\", value)` per value",
             old,
         ),
@@ -64,16 +69,16 @@ pub fn run(seconds: f64, repeats: usize) -> Result<(), String> {
     Ok(())
 }
 
-/// Best µs per step, per row, per old-style row and per refresh.
+/// Best µs per step, per row, per old-style row, per refresh and per reading of the values.
 fn measure(
     sim: &mut Simulation,
     table: &[Output],
     w: &mut BufWriter<Sink>,
     seconds: f64,
     repeats: usize,
-) -> Result<[f64; 4], String> {
+) -> Result<[f64; 5], String> {
     let io = |e: std::io::Error| format!("writing the benchmark file: {e}");
-    let mut best = [f64::INFINITY; 4];
+    let mut best = [f64::INFINITY; 5];
     let mut rows = RowWriter::new(table);
     let budget = seconds / repeats as f64;
     for _ in 0..repeats {
@@ -102,6 +107,14 @@ fn measure(
             Ok(())
         })?;
         best[3] = best[3].min(us);
+        let us = timed(budget, 100, |n| {
+            for _ in 0..n {
+                let sum: f64 = table.iter().map(|o| o.quantity.value(sim)).sum();
+                std::hint::black_box(sum);
+            }
+            Ok(())
+        })?;
+        best[4] = best[4].min(us);
     }
     w.flush().map_err(io)?;
     Ok(best)
