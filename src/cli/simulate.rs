@@ -74,9 +74,9 @@ pub fn simulate(scene: Scene, request: Request) -> Result<(), String> {
         eprintln!("warning: {w}");
     }
     let path = output.unwrap_or_else(|| PathBuf::from(format!("{}.csv", scene.name)));
-    let mut partial = Partial::create(&path)?;
+    let (partial, file) = Partial::create(&path)?;
     let io = |e: std::io::Error| format!("writing {}: {e}", path.display());
-    let mut w = BufWriter::new(partial.file.take().expect("just created"));
+    let mut w = BufWriter::new(file);
     outputs::write_header(&mut w, &table).map_err(io)?;
     let mut rows = outputs::RowWriter::new(&table);
     run(&mut sim, inputs.as_ref(), time, interval, |sim| {
@@ -170,12 +170,11 @@ fn check_size(sim: &Simulation, time: f64, interval: f64, columns: usize) -> Res
 struct Partial {
     tmp: PathBuf,
     target: PathBuf,
-    file: Option<File>,
     done: bool,
 }
 
 impl Partial {
-    fn create(target: &Path) -> Result<Self, String> {
+    fn create(target: &Path) -> Result<(Self, File), String> {
         let name = target
             .file_name()
             .ok_or_else(|| format!("-o {}: not a file name", target.display()))?;
@@ -185,12 +184,12 @@ impl Partial {
         let tmp = target.with_file_name(tmp_name);
         let file =
             File::create(&tmp).map_err(|e| format!("cannot create {}: {e}", target.display()))?;
-        Ok(Self {
+        let partial = Self {
             tmp,
             target: target.to_path_buf(),
-            file: Some(file),
             done: false,
-        })
+        };
+        Ok((partial, file))
     }
 
     fn commit(mut self) -> Result<(), String> {
