@@ -213,11 +213,66 @@ pub fn write_header(w: &mut impl Write, table: &[Output]) -> std::io::Result<()>
     writeln!(w)
 }
 
-/// Writes one CSV row for the current state.
-pub fn write_row(w: &mut impl Write, table: &[Output], sim: &Simulation) -> std::io::Result<()> {
-    write!(w, "{}", sim.time())?;
-    for o in table {
-        write!(w, ",{:e}", o.quantity.value(sim))?;
+/// Writes CSV rows: the time, then each output, as [`write_number`] writes them. A row is
+/// formatted into a buffer sized once for the longest possible row of its table, so
+/// writing rows allocates nothing, and handed to the writer in one piece.
+#[derive(Debug)]
+pub struct RowWriter {
+    line: Vec<u8>,
+}
+
+/// Longest text of one value: `-2.2250738585072014e-308` and a comma.
+const MAX_CELL: usize = 25;
+
+impl RowWriter {
+    /// A writer for rows of `table`.
+    pub fn new(table: &[Output]) -> Self {
+        Self {
+            line: Vec::with_capacity(MAX_CELL * (table.len() + 1) + 1),
+        }
     }
-    writeln!(w)
+
+    /// Writes one row for the current state of `sim` (whose outputs are fresh).
+    pub fn write_row(
+        &mut self,
+        w: &mut impl Write,
+        table: &[Output],
+        sim: &Simulation,
+    ) -> std::io::Result<()> {
+        let mut digits = zmij::Buffer::new();
+        let line = &mut self.line;
+        line.clear();
+        line.extend_from_slice(number(&mut digits, sim.time()).as_bytes());
+        for o in table {
+            line.push(b',');
+            line.extend_from_slice(number(&mut digits, o.quantity.value(sim)).as_bytes());
+        }
+        line.push(b'\n');
+        w.write_all(line)
+    }
+}
+
+/// Writes a number as people write it: the shortest decimal that reads back as the same
+/// `f64` (`0`, `0.5773502691896258`, `-12.5`, `1e-7`, `1.5e+20`), `NaN`, `inf` or `-inf`.
+pub fn write_number(w: &mut impl Write, x: f64) -> std::io::Result<()> {
+    w.write_all(number(&mut zmij::Buffer::new(), x).as_bytes())
+}
+
+/// The text of [`write_number`], formatted in `digits`.
+pub fn number(digits: &mut zmij::Buffer, x: f64) -> &str {
+    if x == 0.0 {
+        return if x.is_sign_negative() { "-0" } else { "0" };
+    }
+    if !x.is_finite() {
+        return if x.is_nan() {
+            "NaN"
+        } else if x > 0.0 {
+            "inf"
+        } else {
+            "-inf"
+        };
+    }
+    // zmij prints integers as `12.0`, large and small magnitudes as `1.5e+20`, `1e-7`.
+    let s = digits.format_finite(x);
+    s.strip_suffix(".0").unwrap_or(s)
 }

@@ -1,19 +1,19 @@
 //! Command-line front end. Each subcommand is a thin layer over the library.
 
 mod bench;
+mod bench_csv;
 mod bench_effects;
+mod inputs;
 mod report;
+mod simulate;
 
-use std::fs::File;
-use std::io::{BufWriter, Write};
 use std::path::PathBuf;
 
 use clap::{Parser, Subcommand};
 
+use tensegrity_fmu::fmi;
 use tensegrity_fmu::integrator::Method;
 use tensegrity_fmu::scene::{self, Scene, BUILTIN_DEFAULT};
-use tensegrity_fmu::{fmi, outputs};
-use tensegrity_fmu::{Model, Simulation};
 
 /// Tensegrity dynamics (Cheong, Skelton & Cho 2014) as FMI 2.0 co-simulation FMUs.
 #[derive(Parser, Debug)]
@@ -35,9 +35,14 @@ enum Command {
         /// Internal step in s (default: the scene's solver.step_size).
         #[arg(long)]
         step_size: Option<f64>,
-        /// Write a row every this many seconds (default: every step).
+        /// Write a row at every multiple of this many seconds and at --time (default: the step size).
         #[arg(long)]
         interval: Option<f64>,
+        /// CSV of input values: header `time,<input names>` (e.g. `node[7].fx`,
+        /// `cable[3].force_density`), applied as fmpy applies them (interpolated, held over
+        /// each step; a time written twice is a step).
+        #[arg(long, value_name = "FILE.csv")]
+        inputs: Option<PathBuf>,
         /// Turn the constraint correction off.
         #[arg(long)]
         no_correction: bool,
@@ -99,6 +104,16 @@ enum Command {
 /// Benchmarks beyond the default scaling one.
 #[derive(Subcommand, Debug)]
 enum BenchCommand {
+    /// µs per CSV row of `simulate` next to µs per tower20 step, with the ratio (and the
+    /// row as it was written before, for comparison).
+    Csv {
+        /// Wall time per measured quantity, s, shared among its repeats.
+        #[arg(long, default_value_t = 1.0)]
+        seconds: f64,
+        /// Measurements per quantity, interleaved; the best is printed.
+        #[arg(long, default_value_t = 10)]
+        repeats: usize,
+    },
     /// µs per step of tower20 with only the base effects (elastic cables, pins, joints),
     /// with every optional effect declared at zero, and with them active.
     Effects {
@@ -120,6 +135,7 @@ pub fn run(cli: Cli) -> Result<(), String> {
             time,
             step_size,
             interval,
+            inputs,
             no_correction,
             method,
             rtol,
@@ -138,7 +154,13 @@ pub fn run(cli: Cli) -> Result<(), String> {
             solver.rtol = rtol.unwrap_or(solver.rtol);
             solver.atol = atol.unwrap_or(solver.atol);
             solver.correction &= !no_correction;
-            simulate(scene, time, interval, output)
+            let request = simulate::Request {
+                time,
+                interval,
+                inputs,
+                output,
+            };
+            simulate::simulate(scene, request)
         }
         Command::Scene { name: None } => {
             for n in scene::builtin_names() {
@@ -147,15 +169,14 @@ pub fn run(cli: Cli) -> Result<(), String> {
             Ok(())
         }
         Command::Scene { name: Some(name) } => {
-            let s = scene::generate(&name).ok_or_else(|| {
-                format!(
-                    "unknown built-in scene '{name}'; known: {}",
-                    scene::builtin_names().join(", ")
-                )
-            })?;
+            let s = scene::generate(&name).ok_or_else(|| scene::unknown_builtin(&name))?;
             print!("{}", s.to_toml_string());
             Ok(())
         }
+        Command::Bench {
+            what: Some(BenchCommand::Csv { seconds, repeats }),
+            ..
+        } => bench_csv::run(seconds, repeats),
         Command::Bench {
             what: Some(BenchCommand::Effects { seconds, repeats }),
             ..
@@ -182,50 +203,6 @@ pub fn run(cli: Cli) -> Result<(), String> {
             binary,
         } => build(scene.as_deref().unwrap_or(BUILTIN_DEFAULT), output, binary),
     }
-}
-
-fn simulate(
-    scene: Scene,
-    time: f64,
-    interval: Option<f64>,
-    output: Option<PathBuf>,
-) -> Result<(), String> {
-    let model = Model::new(&scene).map_err(|e| e.to_string())?;
-    let h = model.solver.step_size;
-    if !(h > 0.0 && h.is_finite() && time >= 0.0 && time.is_finite()) {
-        return Err(format!(
-            "--step-size and --time must be positive and finite (got {h}, {time})"
-        ));
-    }
-    let mut sim = Simulation::new(model);
-    for w in sim.warnings() {
-        eprintln!("warning: {w}");
-    }
-    if let Some(w) = sim.stability_problem() {
-        eprintln!("warning: {w}");
-    }
-    let path = output.unwrap_or_else(|| PathBuf::from(format!("{}.csv", scene.name)));
-    let file = File::create(&path).map_err(|e| format!("cannot create {}: {e}", path.display()))?;
-    let mut w = BufWriter::new(file);
-    let table = outputs::outputs(&sim);
-    let io = |e: std::io::Error| format!("writing {}: {e}", path.display());
-    outputs::write_header(&mut w, &table).map_err(io)?;
-    outputs::write_row(&mut w, &table, &sim).map_err(io)?;
-    let steps = (time / h).round() as u64;
-    let every = interval.map_or(1, |i| ((i / h).round() as u64).max(1));
-    let mut done = 0;
-    while done < steps {
-        let n = every.min(steps - done);
-        // Output points are on the step grid; an adaptive method steps freely between them.
-        sim.advance_to((done + n) as f64 * h)
-            .map_err(|e| e.to_string())?;
-        sim.refresh();
-        outputs::write_row(&mut w, &table, &sim).map_err(io)?;
-        done += n;
-    }
-    w.flush().map_err(io)?;
-    println!("{}", path.display());
-    Ok(())
 }
 
 fn build(scene_arg: &str, output: Option<PathBuf>, binary: Option<PathBuf>) -> Result<(), String> {

@@ -1,0 +1,209 @@
+//! `simulate`: run a scene and write a CSV whose columns are the FMU's output names.
+//!
+//! Rows are at `k · --interval` (computed as a product, not a running sum) and at
+//! `--time`; between them `Simulation::advance_to` integrates exactly as `fmi2DoStep` does
+//! (steps of `solver.step_size`, the last one shortened). With `--inputs`, the
+//! communication points and input values are fmpy's (see [`super::inputs`]).
+
+use std::fs::File;
+use std::io::BufWriter;
+use std::path::{Path, PathBuf};
+
+use tensegrity_fmu::integrator::Method;
+use tensegrity_fmu::scene::Scene;
+use tensegrity_fmu::{outputs, Model, Simulation};
+
+use super::inputs::{isclose, InputTable};
+
+/// Most rows one `simulate` writes.
+pub const MAX_ROWS: f64 = 1e7;
+/// Most values (rows × columns) one `simulate` writes: about 2–4 GB of CSV.
+pub const MAX_VALUES: f64 = 2.5e8;
+/// Most internal fixed steps one `simulate` takes.
+pub const MAX_STEPS: f64 = 1e9;
+
+/// What `simulate` was asked for, beyond the scene.
+pub struct Request {
+    /// Simulated time, s.
+    pub time: f64,
+    /// Row interval, s (default: the step size).
+    pub interval: Option<f64>,
+    /// Input CSV.
+    pub inputs: Option<PathBuf>,
+    /// CSV to write (default: `<scene name>.csv`).
+    pub output: Option<PathBuf>,
+}
+
+/// Runs the scene and writes the CSV; on failure no CSV is left behind.
+pub fn simulate(scene: Scene, request: Request) -> Result<(), String> {
+    let Request {
+        time,
+        interval,
+        inputs,
+        output,
+    } = request;
+    let model = Model::new(&scene).map_err(|e| e.to_string())?;
+    let h = model.solver.step_size;
+    if !(h > 0.0 && h.is_finite()) {
+        return Err(format!(
+            "--step-size must be positive and finite (got {h}); pass e.g. --step-size 0.001"
+        ));
+    }
+    if !(time >= 0.0 && time.is_finite()) {
+        return Err(format!(
+            "--time must be zero or positive and finite (got {time}); pass e.g. --time 1"
+        ));
+    }
+    let interval = interval.unwrap_or(h);
+    if !(interval > 0.0 && interval.is_finite()) {
+        return Err(format!(
+            "--interval must be positive and finite (got {interval}); pass e.g. --interval 0.01"
+        ));
+    }
+    let mut sim = Simulation::new(model);
+    let table = outputs::outputs(&sim);
+    check_size(&sim, time, interval, table.len() + 1)?;
+    let inputs = match &inputs {
+        Some(path) => Some(InputTable::read(path, &sim)?),
+        None => None,
+    };
+    for w in sim.warnings() {
+        eprintln!("warning: {w}");
+    }
+    if let Some(w) = sim.stability_problem() {
+        eprintln!("warning: {w}");
+    }
+    let path = output.unwrap_or_else(|| PathBuf::from(format!("{}.csv", scene.name)));
+    let (partial, file) = Partial::create(&path)?;
+    let io = |e: std::io::Error| format!("writing {}: {e}", path.display());
+    let mut w = BufWriter::new(file);
+    outputs::write_header(&mut w, &table).map_err(io)?;
+    let mut rows = outputs::RowWriter::new(&table);
+    run(&mut sim, inputs.as_ref(), time, interval, |sim| {
+        rows.write_row(&mut w, &table, sim).map_err(io)
+    })?;
+    drop(w.into_inner().map_err(|e| io(e.into_error()))?);
+    partial.commit()?;
+    println!("{}", path.display());
+    Ok(())
+}
+
+/// fmpy's co-simulation loop (`fmpy.simulation.simulateCS` with a variable communication
+/// step) from 0 to `stop`: `row` is called at 0, at every `k · interval` and at `stop`.
+fn run(
+    sim: &mut Simulation,
+    inputs: Option<&InputTable>,
+    stop: f64,
+    interval: f64,
+    mut row: impl FnMut(&Simulation) -> Result<(), String>,
+) -> Result<(), String> {
+    if let Some(table) = inputs {
+        // As in initialization mode: the value before a step at the start time.
+        table.apply(0.0, false, &mut sim.inputs);
+    }
+    sim.refresh();
+    row(sim)?;
+    let mut time = 0.0;
+    let mut k = 0u64;
+    while !(time > stop || isclose(time, stop)) {
+        let regular = (k + 1) as f64 * interval;
+        let mut next = regular;
+        let event = inputs.map_or(f64::INFINITY, |t| t.next_event(time));
+        if next > event && !isclose(next, event) {
+            next = event;
+        }
+        // The last point is exactly --time (fmpy would keep a product within 1e-9 of it).
+        let last = next > stop || isclose(next, stop);
+        if last {
+            next = stop;
+        }
+        if let Some(table) = inputs {
+            table.apply(time, true, &mut sim.inputs);
+        }
+        sim.advance_to(next)
+            .map_err(|e| format!("simulate stopped, no CSV written: {e}"))?;
+        time = next;
+        let on_grid = isclose(time, regular);
+        if on_grid {
+            k += 1;
+        }
+        if on_grid || last {
+            sim.refresh();
+            row(sim)?;
+        }
+    }
+    Ok(())
+}
+
+/// Refuses runs whose output or work would be absurd, before anything is written.
+fn check_size(sim: &Simulation, time: f64, interval: f64, columns: usize) -> Result<(), String> {
+    let rows = (time / interval).ceil() + 1.0;
+    let values = rows * columns as f64;
+    if rows > MAX_ROWS || values > MAX_VALUES {
+        return Err(format!(
+            "--time {time} with --interval {interval} would write {rows:.0} rows of {columns} columns ({values:.2e} values, about {:.0} GB), more than the limit of {MAX_ROWS:.0e} rows and {MAX_VALUES:.1e} values; raise --interval or shorten --time",
+            values * 16.0 / 1e9
+        ));
+    }
+    let solver = &sim.model().solver;
+    if solver.method != Method::Dopri5 {
+        let h = solver.step_size;
+        let per_row = (interval.min(time.max(h)) / h).ceil();
+        if per_row > solver.max_steps as f64 {
+            return Err(format!(
+                "--interval {interval} takes {per_row:.0} internal steps of {h} s per row, more than solver.max_steps = {}; lower --interval, raise --step-size, or raise solver.max_steps in the scene",
+                solver.max_steps
+            ));
+        }
+        let steps = (time / h).ceil() + rows;
+        if steps > MAX_STEPS {
+            return Err(format!(
+                "--time {time} takes {steps:.2e} internal steps of {h} s, more than the limit of {MAX_STEPS:.0e}; shorten --time or raise --step-size"
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// The CSV while it is written: a temporary file beside the target, renamed onto it at
+/// the end and removed if the run fails.
+struct Partial {
+    tmp: PathBuf,
+    target: PathBuf,
+    done: bool,
+}
+
+impl Partial {
+    fn create(target: &Path) -> Result<(Self, File), String> {
+        let name = target
+            .file_name()
+            .ok_or_else(|| format!("-o {}: not a file name", target.display()))?;
+        let mut tmp_name = std::ffi::OsString::from(".");
+        tmp_name.push(name);
+        tmp_name.push(format!(".partial-{}", std::process::id()));
+        let tmp = target.with_file_name(tmp_name);
+        let file =
+            File::create(&tmp).map_err(|e| format!("cannot create {}: {e}", target.display()))?;
+        let partial = Self {
+            tmp,
+            target: target.to_path_buf(),
+            done: false,
+        };
+        Ok((partial, file))
+    }
+
+    fn commit(mut self) -> Result<(), String> {
+        std::fs::rename(&self.tmp, &self.target)
+            .map_err(|e| format!("cannot write {}: {e}", self.target.display()))?;
+        self.done = true;
+        Ok(())
+    }
+}
+
+impl Drop for Partial {
+    fn drop(&mut self) {
+        if !self.done {
+            let _ = std::fs::remove_file(&self.tmp);
+        }
+    }
+}
