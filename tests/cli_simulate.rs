@@ -199,7 +199,7 @@ fn absurd_output_is_refused_before_writing() {
         "--interval",
         "1",
         "--step-size",
-        "1e-8",
+        "1e-6",
         "-o",
         csv.to_str().unwrap(),
     ]);
@@ -252,4 +252,31 @@ fn a_failed_run_leaves_no_csv_and_keeps_an_old_one() {
         .filter(|n| n.contains("fresh"))
         .collect();
     assert!(left.is_empty(), "{left:?}");
+}
+
+#[test]
+fn a_step_size_far_below_the_time_scale_is_refused_before_writing() {
+    for step in ["1e-12", "1e-300"] {
+        let out = temp(&format!("tiny-{step}.csv"));
+        let started = std::time::Instant::now();
+        let (ok, _, err) = run(&[
+            "simulate",
+            "prism2-elastic",
+            "--time",
+            "1",
+            "--interval",
+            "0.01",
+            "--step-size",
+            step,
+            "-o",
+            out.to_str().unwrap(),
+        ]);
+        assert!(!ok);
+        assert!(
+            err.contains("solver.step_size =") && err.contains("fastest time scale"),
+            "{err}"
+        );
+        assert!(!out.exists(), "nothing is written");
+        assert!(started.elapsed().as_secs() < 30);
+    }
 }

@@ -61,6 +61,9 @@ pub fn simulate(scene: Scene, request: Request) -> Result<(), String> {
         ));
     }
     let mut sim = Simulation::new(model);
+    if let Some(why) = sim.step_size_problem() {
+        return Err(why);
+    }
     let table = outputs::outputs(&sim);
     check_size(&sim, time, interval, table.len() + 1)?;
     let inputs = match &inputs {
