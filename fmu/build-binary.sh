@@ -6,7 +6,12 @@
 # `tensegrity-fmu build` packages whenever it was built from the same sources as the CLI.
 set -euo pipefail
 cd "$(dirname "${BASH_SOURCE[0]}")/.."
+repo=$PWD
 export PATH="$PWD/.venv/bin:$PATH"                       # cargo-zigbuild
 export CARGO_ZIGBUILD_PYTHON_PATH="$PWD/.venv/bin/python" # zig as `python -m ziglang`
+# Run from fmu/, not from the repository root: zig prints its include folders relative to
+# the working directory when they lie below it (.venv/...), cargo-zigbuild hands them to
+# bindgen (fmi-sys) as they are, and the build script, run elsewhere, then finds no stddef.h.
+cd fmu
 cargo zigbuild --release -p tensegrity-fmu-binary --target x86_64-unknown-linux-gnu.2.28 "$@"
-echo "target/x86_64-unknown-linux-gnu/release/libtensegrity_fmu_binary.so"
+echo "$repo/target/x86_64-unknown-linux-gnu/release/libtensegrity_fmu_binary.so"
