@@ -1,14 +1,14 @@
 """The shipped FMUs under libcosim (DNV's Open Simulation Platform master, via libcosimpy).
 
 libcosim runs the same binary as fmpy, so with the same communication points and the same
-inputs both must agree to round-off. libcosim counts time in integer nanoseconds and hands
-the FMU `n * 1e-9` seconds; the fmpy runs here use exactly those doubles. libcosim ignores
-Enumeration variables (it warns about `solver.method`), which changes nothing here.
+inputs both must agree to round-off. libcosim counts time in integer nanoseconds and calls
+doStep(t / 1e9, (t + h) / 1e9 - t / 1e9); the fmpy runs here pass exactly those doubles.
+libcosim ignores Enumeration variables (it warns about `solver.method`), which changes
+nothing here.
 """
 
 import numpy as np
 import pytest
-from libcosimpy.CosimEnums import CosimVariableType
 from libcosimpy.CosimExecution import CosimExecution
 from libcosimpy.CosimLogging import CosimLogLevel, log_output_level
 from libcosimpy.CosimManipulator import CosimManipulator
@@ -79,14 +79,19 @@ class Cosim:
         return out if isinstance(index, list) else out[0]
 
 
+def cosim_step(k, step_ns):
+    """libcosim's doStep arguments for step k (cosim::to_double_time_point/duration)."""
+    t, t1 = k * step_ns / 1e9, (k + 1) * step_ns / 1e9
+    return t, t1 - t
+
+
 def fmpy_run(slave, n, step_ns, names, each=None):
     """The fmpy counterpart of Cosim.run, at libcosim's communication points."""
     rows = []
-    h = step_ns * 1e-9
     for k in range(n):
         if each:
             each(k)
-        slave.fmu.doStep(k * step_ns * 1e-9, h)
+        slave.fmu.doStep(*cosim_step(k, step_ns))
         rows.append(slave.get(names))
     return np.array(rows)
 
@@ -199,9 +204,8 @@ def test_two_prisms_coupled_through_libcosim(fmus, open_fmu):
     sb.set({target: sa.get([source])[0]})
     rows = {"a": [], "b": []}
     for k in range(n):
-        t = k * MS * 1e-9
-        sa.fmu.doStep(t, MS * 1e-9)
-        sb.fmu.doStep(t, MS * 1e-9)
+        sa.fmu.doStep(*cosim_step(k, MS))
+        sb.fmu.doStep(*cosim_step(k, MS))
         sb.set({target: sa.get([source])[0]})
         rows["a"].append(sa.get(names))
         rows["b"].append(sb.get(names))
