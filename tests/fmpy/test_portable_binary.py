@@ -66,10 +66,9 @@ def test_shipped_binary_is_the_portable_build(fmus):
         )
     native = LIBRARY.read_bytes()
     assert portable != native
-    print(
-        f"native {LIBRARY}: highest GLIBC_%d.%d, {len(native)} bytes; portable: highest GLIBC_%d.%d, {len(portable)} bytes"
-        % (*max(glibc_needs(native)), *max(glibc_needs(portable)))
-    )
+    for label, data in (("native", native), ("portable", portable)):
+        x, y = max(glibc_needs(data))
+        print(f"{label}: highest GLIBC_{x}.{y}, {len(data)} bytes")
 
 
 def test_portable_binary_steps_like_the_native_one(fmus, open_fmu, tmp_path):
