@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Installs what the build and the tests need: libclang (bindgen in fmi-sys) and a Python
-# venv with the packages in tests/requirements.txt. Safe to run again.
+# venv with the packages in tests/requirements.txt (fmpy, libcosimpy, and cargo-zigbuild with
+# zig for the portable FMU binary of fmu/build-binary.sh). Safe to run again.
 set -euo pipefail
 cd "$(dirname "${BASH_SOURCE[0]}")/.."
 

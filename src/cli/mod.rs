@@ -66,7 +66,8 @@ enum Command {
         /// Output file (default: <scene name>.fmu).
         #[arg(short, long)]
         output: Option<PathBuf>,
-        /// The generic FMU binary (default: libtensegrity_fmu_binary.so next to this program).
+        /// The generic FMU binary (default: fmu/build-binary.sh's portable one when built from
+        /// these sources, else libtensegrity_fmu_binary.so next to this program).
         #[arg(long)]
         binary: Option<PathBuf>,
     },
@@ -212,8 +213,7 @@ fn build(scene_arg: &str, output: Option<PathBuf>, binary: Option<PathBuf>) -> R
         None => {
             let exe = std::env::current_exe().map_err(|e| e.to_string())?;
             let dir = exe.parent().ok_or("cannot locate this program's folder")?;
-            // `cargo run` puts the program in target/<profile>/, the library beside it.
-            dir.join("libtensegrity_fmu_binary.so")
+            default_binary(dir)
         }
     };
     if !binary.is_file() {
@@ -230,4 +230,33 @@ fn build(scene_arg: &str, output: Option<PathBuf>, binary: Option<PathBuf>) -> R
     );
     println!("{}", out.display());
     Ok(())
+}
+
+/// The FMU binary for `build` without `--binary`. `cargo build` puts the program in
+/// target/<profile>/ and the library beside it; `fmu/build-binary.sh` (cargo-zigbuild, glibc
+/// 2.28) puts a portable one in target/x86_64-unknown-linux-gnu/<profile>/, preferred
+/// whenever it was built from this program's sources (cargo may rebuild either one later).
+fn default_binary(dir: &std::path::Path) -> PathBuf {
+    const NAME: &str = "libtensegrity_fmu_binary.so";
+    let native = dir.join(NAME);
+    let (Some(target), Some(profile)) = (dir.parent(), dir.file_name()) else {
+        return native;
+    };
+    let portable = target
+        .join("x86_64-unknown-linux-gnu")
+        .join(profile)
+        .join(NAME);
+    let Ok(so) = std::fs::read(&portable) else {
+        return native;
+    };
+    let id = fmi::BUILD_ID.as_bytes();
+    if so.windows(id.len()).any(|w| w == id) {
+        return portable;
+    }
+    eprintln!(
+        "note: {} is from other sources, packaging {} (run fmu/build-binary.sh for the portable one)",
+        portable.display(),
+        native.display()
+    );
+    native
 }

@@ -28,16 +28,21 @@ from fmpy import calloc, free
 REPO = Path(__file__).resolve().parents[2]
 CLI = REPO / "target" / "release" / "tensegrity-fmu"
 LIBRARY = REPO / "target" / "release" / "libtensegrity_fmu_binary.so"
+# The portable binary (glibc 2.28, fmu/build-binary.sh) that `tensegrity-fmu build` packages.
+PORTABLE = REPO / "target" / "x86_64-unknown-linux-gnu" / "release" / LIBRARY.name
 BUILTINS = ["prism2", "prism2-elastic", "icosahedron", "tower20"]
 
 @pytest.fixture(scope="session")
 def cli():
-    """The CLI, built with `cargo build --release --workspace` if it or the FMU binary is missing."""
+    """The CLI, built with `cargo build --release --workspace` (and the portable binary with
+    fmu/build-binary.sh) if it or the FMU binary is missing."""
     if not (CLI.is_file() and LIBRARY.is_file()):
         subprocess.run(
             ["cargo", "build", "--release", "--workspace"], cwd=REPO, check=True
         )
-    assert CLI.is_file() and LIBRARY.is_file()
+    if not PORTABLE.is_file():
+        subprocess.run(["bash", "fmu/build-binary.sh"], cwd=REPO, check=True)
+    assert CLI.is_file() and LIBRARY.is_file() and PORTABLE.is_file()
     return CLI
 
 
