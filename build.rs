@@ -71,12 +71,15 @@ fn git_commit(root: &Path) -> String {
 
 fn main() {
     println!("cargo:rerun-if-changed=build.rs");
-    let root_dir = Path::new(env!("CARGO_MANIFEST_DIR"));
+    // Read when the script runs, not when it was compiled: a copied target/ must not hash
+    // another checkout's sources.
+    let manifest_dir = std::env::var("CARGO_MANIFEST_DIR").unwrap_or_else(|_| ".".into());
+    let root_dir = Path::new(&manifest_dir);
     println!(
         "cargo:rustc-env=TENSEGRITY_GIT_COMMIT={}",
         git_commit(root_dir)
     );
-    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let root = root_dir;
     let mut hasher = Sha256::new();
     hasher.update(env!("CARGO_PKG_VERSION").as_bytes());
     for dir in ["src", "fmu/src", "modelDescription/src"] {
