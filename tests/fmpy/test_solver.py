@@ -1,4 +1,4 @@
-"""Solver settings as FMU parameters: solver.method (enumeration), solver.rtol, solver.atol."""
+"""Solver settings as FMU parameters: solver.method (Integer), solver.rtol, solver.atol."""
 
 import numpy as np
 import pytest
