@@ -111,6 +111,9 @@ fn root_names_version_license_tool_and_date() {
 #[test]
 fn iso8601_dates_in_utc() {
     assert_eq!(iso8601_utc(0), "1970-01-01T00:00:00Z");
+    // A hostile SOURCE_DATE_EPOCH is clamped instead of panicking.
+    assert_eq!(iso8601_utc(i64::MAX), "9999-12-31T23:59:59Z");
+    assert_eq!(iso8601_utc(-5), "1970-01-01T00:00:00Z");
     // `date -u -d @951782400`, a leap day, and `date -u -d @1700000000`.
     assert_eq!(iso8601_utc(951_782_400), "2000-02-29T00:00:00Z");
     assert_eq!(iso8601_utc(1_700_000_000), "2023-11-14T22:13:20Z");

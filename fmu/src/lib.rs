@@ -8,19 +8,23 @@
 mod ffi;
 mod guard;
 mod state;
+mod values;
 
 use std::ffi::c_char;
 use std::panic::AssertUnwindSafe;
 use std::ptr;
 
 use fmi_sys::fmi2::*;
-use tensegrity_fmu::fmi::variables::BaseType;
 use tensegrity_fmu::fmi::{resource_path, Category, FmiError, FmiResult, Instance, Status};
 
-use ffi::{slice, slice_mut, text, value_references, Component};
+use ffi::{slice, text, Component};
 pub use state::*;
+pub use values::*;
 
 const ERROR: fmi2Status = fmi2Status_fmi2Error;
+
+/// Most category names one `fmi2SetDebugLogging` may list (each may repeat a few times).
+const MAX_CATEGORIES: usize = 64;
 
 fn status(s: Status) -> fmi2Status {
     match s {
@@ -31,27 +35,31 @@ fn status(s: Status) -> fmi2Status {
     }
 }
 
-/// Runs `body` on the instance behind `c`, catching panics and logging failures.
+/// Runs `body` on the instance behind `c`, catching panics and logging failures. The
+/// logging itself runs inside the guard too, so nothing can unwind into the host.
 fn call(c: fmi2Component, name: &str, body: impl FnOnce(&mut Instance) -> FmiResult) -> fmi2Status {
     let Some(component) = (unsafe { (c as *mut Component).as_mut() }) else {
         return ERROR;
     };
     let result = guard::quietly(AssertUnwindSafe(|| body(&mut component.instance)));
-    let out = match result {
-        Ok(Ok(s)) => status(s),
-        Ok(Err(e)) => {
-            component.instance.fail(&e);
-            status(e.status)
-        }
-        Err(panic) => {
-            component.instance.fail(&FmiError::failed(format!(
-                "{name}: internal error: {panic}"
-            )));
-            ERROR
-        }
-    };
-    component.flush_log();
-    out
+    guard::quietly(AssertUnwindSafe(|| {
+        let out = match result {
+            Ok(Ok(s)) => status(s),
+            Ok(Err(e)) => {
+                component.instance.fail(&e);
+                status(e.status)
+            }
+            Err(panic) => {
+                component.instance.fail(&FmiError::failed(format!(
+                    "{name}: internal error: {panic}"
+                )));
+                ERROR
+            }
+        };
+        component.flush_log();
+        out
+    }))
+    .unwrap_or(ERROR)
 }
 
 fn fail(message: String) -> FmiError {
@@ -76,6 +84,13 @@ pub unsafe extern "C" fn fmi2SetDebugLogging(
     categories: *const fmi2String,
 ) -> fmi2Status {
     call(c, "fmi2SetDebugLogging", |i| {
+        if nCategories > MAX_CATEGORIES {
+            return Err(fail(format!(
+                "fmi2SetDebugLogging: nCategories = {nCategories}, but this FMU has {} log \
+                 categories; pass the number of elements of categories (0 for all)",
+                Category::ALL.len()
+            )));
+        }
         let names = slice(categories, nCategories, "fmi2SetDebugLogging: categories")?;
         let names: Vec<String> = names.iter().map(|&p| text(p).unwrap_or_default()).collect();
         i.set_debug_logging(loggingOn != 0, &names)
@@ -184,124 +199,6 @@ pub unsafe extern "C" fn fmi2Terminate(c: fmi2Component) -> fmi2Status {
 #[no_mangle]
 pub unsafe extern "C" fn fmi2Reset(c: fmi2Component) -> fmi2Status {
     call(c, "fmi2Reset", Instance::reset)
-}
-
-#[no_mangle]
-pub unsafe extern "C" fn fmi2GetReal(
-    c: fmi2Component,
-    vr: *const fmi2ValueReference,
-    nvr: usize,
-    value: *mut fmi2Real,
-) -> fmi2Status {
-    call(c, "fmi2GetReal", |i| {
-        let vrs = value_references(i, vr, nvr, "fmi2GetReal")?;
-        let values = slice_mut(value, nvr, "fmi2GetReal: value")?;
-        i.get("fmi2GetReal", BaseType::Real, vrs, values)
-    })
-}
-
-#[no_mangle]
-pub unsafe extern "C" fn fmi2GetBoolean(
-    c: fmi2Component,
-    vr: *const fmi2ValueReference,
-    nvr: usize,
-    value: *mut fmi2Boolean,
-) -> fmi2Status {
-    call(c, "fmi2GetBoolean", |i| {
-        let vrs = value_references(i, vr, nvr, "fmi2GetBoolean")?;
-        let out = slice_mut(value, nvr, "fmi2GetBoolean: value")?;
-        i.get_each("fmi2GetBoolean", BaseType::Boolean, vrs, |k, v| {
-            out[k] = fmi2Boolean::from(v != 0.0)
-        })
-    })
-}
-
-#[no_mangle]
-pub unsafe extern "C" fn fmi2GetInteger(
-    c: fmi2Component,
-    vr: *const fmi2ValueReference,
-    nvr: usize,
-    value: *mut fmi2Integer,
-) -> fmi2Status {
-    call(c, "fmi2GetInteger", |i| {
-        let vrs = value_references(i, vr, nvr, "fmi2GetInteger")?;
-        let out = slice_mut(value, nvr, "fmi2GetInteger: value")?;
-        i.get_each("fmi2GetInteger", BaseType::Integer, vrs, |k, v| {
-            out[k] = v as fmi2Integer
-        })
-    })
-}
-
-#[no_mangle]
-pub unsafe extern "C" fn fmi2GetString(
-    c: fmi2Component,
-    vr: *const fmi2ValueReference,
-    nvr: usize,
-    _value: *mut fmi2String,
-) -> fmi2Status {
-    call(c, "fmi2GetString", |i| {
-        let vrs = value_references(i, vr, nvr, "fmi2GetString")?;
-        i.untyped("fmi2GetString", vrs)
-    })
-}
-
-#[no_mangle]
-pub unsafe extern "C" fn fmi2SetReal(
-    c: fmi2Component,
-    vr: *const fmi2ValueReference,
-    nvr: usize,
-    value: *const fmi2Real,
-) -> fmi2Status {
-    call(c, "fmi2SetReal", |i| {
-        let vrs = value_references(i, vr, nvr, "fmi2SetReal")?;
-        let values = slice(value, nvr, "fmi2SetReal: value")?;
-        i.set("fmi2SetReal", BaseType::Real, vrs, values)
-    })
-}
-
-#[no_mangle]
-pub unsafe extern "C" fn fmi2SetBoolean(
-    c: fmi2Component,
-    vr: *const fmi2ValueReference,
-    nvr: usize,
-    value: *const fmi2Boolean,
-) -> fmi2Status {
-    call(c, "fmi2SetBoolean", |i| {
-        let vrs = value_references(i, vr, nvr, "fmi2SetBoolean")?;
-        let values = slice(value, nvr, "fmi2SetBoolean: value")?;
-        i.set_each("fmi2SetBoolean", BaseType::Boolean, vrs, |k| {
-            f64::from(u8::from(values[k] != 0))
-        })
-    })
-}
-
-#[no_mangle]
-pub unsafe extern "C" fn fmi2SetInteger(
-    c: fmi2Component,
-    vr: *const fmi2ValueReference,
-    nvr: usize,
-    value: *const fmi2Integer,
-) -> fmi2Status {
-    call(c, "fmi2SetInteger", |i| {
-        let vrs = value_references(i, vr, nvr, "fmi2SetInteger")?;
-        let values = slice(value, nvr, "fmi2SetInteger: value")?;
-        i.set_each("fmi2SetInteger", BaseType::Integer, vrs, |k| {
-            f64::from(values[k])
-        })
-    })
-}
-
-#[no_mangle]
-pub unsafe extern "C" fn fmi2SetString(
-    c: fmi2Component,
-    vr: *const fmi2ValueReference,
-    nvr: usize,
-    _value: *const fmi2String,
-) -> fmi2Status {
-    call(c, "fmi2SetString", |i| {
-        let vrs = value_references(i, vr, nvr, "fmi2SetString")?;
-        i.untyped("fmi2SetString", vrs)
-    })
 }
 
 /// The functions this FMU declares it does not provide: logged errors.

@@ -46,9 +46,13 @@ pub fn generation_tool(commit: &str) -> String {
     )
 }
 
-/// `YYYY-MM-DDThh:mm:ssZ` for seconds since 1970-01-01 UTC (earlier times as the epoch).
+/// Last second `xs:dateTime` and humantime can write with four year digits (9999-12-31).
+const LAST_FOUR_DIGIT_SECOND: i64 = 253_402_300_799;
+
+/// `YYYY-MM-DDThh:mm:ssZ` for seconds since 1970-01-01 UTC (clamped to 1970..=9999).
 pub fn iso8601_utc(seconds: i64) -> String {
-    let at = std::time::UNIX_EPOCH + std::time::Duration::from_secs(seconds.max(0) as u64);
+    let seconds = seconds.clamp(0, LAST_FOUR_DIGIT_SECOND) as u64;
+    let at = std::time::UNIX_EPOCH + std::time::Duration::from_secs(seconds);
     humantime::format_rfc3339_seconds(at).to_string()
 }
 

@@ -187,15 +187,17 @@ impl Instance {
             self.logging = [on; 3];
             return Ok(Status::Ok);
         }
+        let mut logging = self.logging;
         for c in categories {
             let category = Category::from_name(c).ok_or_else(|| {
                 error(format!(
-                    "fmi2SetDebugLogging: unknown log category '{c}' (known: {})",
+                    "fmi2SetDebugLogging: unknown log category '{c}'; nothing was changed. Use one of {}",
                     Category::ALL.map(Category::name).join(", ")
                 ))
             })?;
-            self.logging[category as usize] = on;
+            logging[category as usize] = on;
         }
+        self.logging = logging;
         Ok(Status::Ok)
     }
 
@@ -269,8 +271,8 @@ impl Instance {
             return Err(error(format!(
                 "{call}: the start time {} s is so large that its resolution ({resolution:e} s) \
                  is too coarse for solver.step_size = {step} s, so time would not advance \
-                 accurately. Start the experiment nearer 0 (fmi2SetupExperiment) or use a larger \
-                 solver.step_size",
+                 accurately. Call fmi2Reset, then fmi2SetupExperiment with a start nearer 0, or \
+                 set a larger solver.step_size",
                 self.core.time
             )));
         }

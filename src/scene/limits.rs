@@ -8,6 +8,8 @@ use crate::error::SceneError;
 /// Longest `name`, in characters: it names the FMU file and its folder when unzipped,
 /// and file systems allow 255 bytes.
 pub const MAX_NAME_CHARS: usize = 100;
+/// Longest `name` in UTF-8 bytes: `.<name>.fmu.partial-<pid>` must fit in 255 bytes.
+pub const MAX_NAME_BYTES: usize = 200;
 /// Longest `description`, in characters.
 pub const MAX_DESCRIPTION_CHARS: usize = 10_000;
 /// Masses outside this range (kg) overflow the inverse-mass products.
@@ -28,6 +30,16 @@ pub(super) fn check(scene: &Scene) -> Result<(), SceneError> {
 
 fn check_name(name: &str) -> Result<(), SceneError> {
     check_text("name", name, MAX_NAME_CHARS, false)?;
+    if name.len() > MAX_NAME_BYTES {
+        return Err(SceneError::invalid(
+            "name",
+            format!(
+                "takes {} bytes in UTF-8; at most {MAX_NAME_BYTES} are allowed (it becomes file \
+                 names, which hold 255 bytes). Shorten it",
+                name.len()
+            ),
+        ));
+    }
     if let Some(c) = name.chars().find(|c| matches!(c, '/' | '\\')) {
         return Err(SceneError::invalid(
             "name",
@@ -61,7 +73,7 @@ fn check_text(key: &str, text: &str, max_chars: usize, multiline: bool) -> Resul
     if count > max_chars {
         return Err(SceneError::invalid(
             key,
-            format!("has {count} characters; at most {max_chars} are allowed"),
+            format!("has {count} characters; at most {max_chars} are allowed. Shorten it"),
         ));
     }
     if let Some((at, c)) = text

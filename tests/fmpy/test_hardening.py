@@ -138,10 +138,23 @@ def test_control_character_in_name_or_description_is_refused(cli, tmp_path, char
 def test_overlong_name_is_refused_naming_the_key_without_a_partial_file(cli, tmp_path, length):
     res, out, took = build(cli, tmp_path, with_key(base_scene(cli), "name", '"' + "n" * length + '"'))
     assert res.returncode != 0
-    assert f"name: has {length} characters; at most 100 are allowed" in res.stderr
+    assert f"name: has {length} characters; at most 100 are allowed. Shorten it" in res.stderr
     assert len(res.stderr) < 300  # the 65,000 characters are not echoed
     assert not out.exists() and leftovers(tmp_path) == []
     assert took < 30
+
+
+def test_multibyte_name_is_limited_in_bytes_for_file_names(cli, tmp_path):
+    res, out, _ = build(cli, tmp_path, with_key(base_scene(cli), "name", '"' + "塔" * 80 + '"'))
+    assert res.returncode != 0
+    assert "name: takes 240 bytes in UTF-8; at most 200 are allowed" in res.stderr, res.stderr
+    assert not out.exists() and leftovers(tmp_path) == []
+    # the default output name <name>.fmu of the longest multi-byte name is a valid file name
+    scene = tmp_path / "tower.toml"
+    scene.write_text(with_key(base_scene(cli), "name", '"' + "塔" * 66 + '"'), encoding="utf-8")
+    res = subprocess.run([str(cli), "build", str(scene)], capture_output=True, text=True, cwd=tmp_path)
+    assert res.returncode == 0, res.stderr
+    assert (tmp_path / ("塔" * 66 + ".fmu")).is_file()
 
 
 def test_longest_name_builds_an_fmu_that_unzips_with_a_c_identifier(cli, tmp_path):
@@ -234,6 +247,21 @@ def test_huge_nvr_is_refused_without_aborting_or_printing(prism2, open_fmu, capf
     out, err = capfd.readouterr()
     assert out == "" and err == ""
     s.run(1, 0.001)  # still running
+
+
+def test_huge_category_count_is_refused_and_a_refused_logging_call_changes_nothing(prism2, open_fmu, capfd):
+    s = open_fmu(prism2, logging=False).init()
+    names = (ctypes.c_char_p * 2)(b"logEvents", b"noSuchCategory")
+    with pytest.raises(FMICallException):
+        s.fmu.fmi2SetDebugLogging(s.fmu.component, 1, HUGE, names)
+    assert any(f"nCategories = {HUGE}" in m for m in s.errors()), s.errors()
+    with pytest.raises(FMICallException):
+        s.fmu.fmi2SetDebugLogging(s.fmu.component, 1, 2, names)
+    assert any("unknown log category 'noSuchCategory'; nothing was changed" in m for m in s.errors())
+    s.run(2, 0.001)
+    assert [m for _, c, m in s.messages if c == "logEvents"] == []  # logEvents stayed off
+    out, err = capfd.readouterr()
+    assert out == "" and err == ""
 
 
 def test_free_fmu_state_ignores_null(prism2, open_fmu):

@@ -412,7 +412,6 @@ def test_tunable_parameters(builtin, loaded):
 
 def test_libcosim_sees_and_sets_the_solver_method(fmus):
     """libcosim (OSP) ignores Enumerations: solver.method must reach it as an Integer."""
-    pytest.importorskip("libcosimpy")
     from libcosimpy.CosimEnums import CosimVariableType
     from libcosimpy.CosimExecution import CosimExecution
     from libcosimpy.CosimObserver import CosimObserver
@@ -420,7 +419,8 @@ def test_libcosim_sees_and_sets_the_solver_method(fmus):
 
     fmu = fmus.builtin("prism2")
     execution = CosimExecution.from_step_size(step_size=10_000_000)  # 10 ms in ns
-    index = execution.add_local_slave(CosimLocalSlave(fmu_path=str(fmu.path), instance_name="p"))
+    slave = CosimLocalSlave(fmu_path=str(fmu.path), instance_name="p")  # outlives its use
+    index = execution.add_local_slave(slave)
     integers = {
         v.name.decode(): v.reference
         for v in execution.slave_variables(slave_index=index)
