@@ -1,25 +1,10 @@
 //! Errors people meet first: a closed pipe, a misspelt built-in, a wrong value in a scene
 //! file, a scene line too long to quote.
 
+mod cli_support;
+use cli_support::{run, temp};
+
 use std::process::{Command, Stdio};
-
-fn run(args: &[&str]) -> (bool, String, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_tensegrity-fmu"))
-        .args(args)
-        .output()
-        .expect("the CLI runs");
-    (
-        out.status.success(),
-        String::from_utf8_lossy(&out.stdout).into_owned(),
-        String::from_utf8_lossy(&out.stderr).into_owned(),
-    )
-}
-
-fn temp(name: &str) -> std::path::PathBuf {
-    let dir = std::env::temp_dir().join(format!("tensegrity-cli-errors-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    dir.join(name)
-}
 
 /// Runs the CLI with its stdout a pipe whose reader is already gone (as `| head` after
 /// it has read its lines).

@@ -2,13 +2,10 @@
 //! fix, and nothing is written. (The values are compared with fmpy in
 //! tests/fmpy/test_cli_inputs.py.)
 
-use std::process::Command;
+mod cli_support;
+use cli_support::temp;
 
-fn temp(name: &str) -> std::path::PathBuf {
-    let dir = std::env::temp_dir().join(format!("tensegrity-cli-inputs-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    dir.join(name)
-}
+use std::process::Command;
 
 /// Runs prism2 with `table` as its input CSV; returns success, stderr and the CSV if any.
 fn simulate(name: &str, table: &str) -> (bool, String, Option<String>) {

@@ -1,27 +1,10 @@
 //! `simulate`: rows at the requested times, numbers as people write them, bounded output,
 //! and no CSV left behind by a failed run.
 
-use std::process::Command;
+mod cli_support;
+use cli_support::{run, temp};
 
 use tensegrity_fmu::outputs::number;
-
-fn run(args: &[&str]) -> (bool, String, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_tensegrity-fmu"))
-        .args(args)
-        .output()
-        .expect("the CLI runs");
-    (
-        out.status.success(),
-        String::from_utf8_lossy(&out.stdout).into_owned(),
-        String::from_utf8_lossy(&out.stderr).into_owned(),
-    )
-}
-
-fn temp(name: &str) -> std::path::PathBuf {
-    let dir = std::env::temp_dir().join(format!("tensegrity-cli-sim-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    dir.join(name)
-}
 
 /// The CSV's `time` column, as written.
 fn times(args: &[&str], name: &str) -> Vec<String> {
