@@ -1,0 +1,7 @@
+//! Seeing a structure: a run recorded as [`Frames`] (from a simulation or a CSV of the FMU's
+//! output names), drawn as PNG/GIF pictures, an interactive HTML page or a ParaView time
+//! series. The drawing modules read only [`Frames`]; nothing here touches the physics.
+
+mod frames;
+
+pub use frames::{Frames, GroundPlane};
