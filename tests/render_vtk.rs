@@ -1,0 +1,341 @@
+//! The ParaView time series (`render::vtk::write_pvd`) read back with the `vtkio` crate:
+//! one `.vtp` per recorded time, listed in the `.pvd` with its time; points, lines and
+//! every array bit for bit equal to the simulation's values (the arrays are written in
+//! VTK's inline binary format, so no digits are lost). Also writes, for
+//! `tests/fmpy/test_vtk_files.py`, the series into `target/render-test/` together with a
+//! JSON of the values taken straight from the simulation.
+
+use std::fs;
+use std::path::{Path, PathBuf};
+
+use serde::Deserialize;
+use tensegrity_fmu::render::vtk::write_pvd;
+use tensegrity_fmu::render::{Frames, GroundPlane};
+use tensegrity_fmu::scene::builtin;
+use tensegrity_fmu::{Model, Simulation};
+use vtkio::model::{Attribute, DataSet, IOBuffer, Piece, PolyDataPiece, VertexNumbers, Vtk};
+
+/// Where the series are written (kept for the pytest).
+fn out_dir() -> PathBuf {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("target/render-test");
+    fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+/// A run of built-in `name` recorded at `times`, with `force` on the first force-input node.
+fn record(name: &str, force: [f64; 3], times: &[f64]) -> Frames {
+    let scene = builtin(name).unwrap();
+    let mut sim = Simulation::new(Model::new(&scene).unwrap());
+    if let Some(f) = sim.inputs.node_force.first_mut() {
+        *f = force.into();
+    }
+    let model = sim.model();
+    let n = model.n_nodes();
+    let mut frames = Frames {
+        name: name.into(),
+        bars: model.bars.iter().map(|b| b.nodes).collect(),
+        cables: model.cables.iter().map(|c| c.nodes).collect(),
+        pinned: (0..n).filter(|&i| model.pinned[i]).collect(),
+        point_masses: model
+            .scene
+            .point_masses
+            .iter()
+            .map(|p| p.node - 1)
+            .collect(),
+        ground: model.ground.as_ref().map(|g| GroundPlane {
+            normal: g.normal.into(),
+            height: g.height,
+        }),
+        times: vec![],
+        positions: vec![],
+        velocities: vec![],
+        tensions: vec![],
+        bar_forces: vec![],
+    };
+    let (nb, nc) = (frames.bars.len(), frames.cables.len());
+    for &t in times {
+        sim.advance_to(t).unwrap();
+        sim.refresh();
+        frames.times.push(t);
+        frames
+            .positions
+            .push((0..n).map(|i| sim.node_position(i).into()).collect());
+        frames
+            .velocities
+            .push((0..n).map(|i| sim.node_velocity(i).into()).collect());
+        frames
+            .tensions
+            .push((0..nc).map(|j| sim.cable_tension(j)).collect());
+        frames
+            .bar_forces
+            .push((0..nb).map(|b| sim.bar_force(b)).collect());
+    }
+    frames
+}
+
+#[derive(Deserialize)]
+struct Pvd {
+    #[serde(rename = "@type")]
+    kind: String,
+    #[serde(rename = "Collection")]
+    collection: Collection,
+}
+
+#[derive(Deserialize)]
+struct Collection {
+    #[serde(rename = "DataSet")]
+    data_sets: Vec<PvdDataSet>,
+}
+
+#[derive(Deserialize)]
+struct PvdDataSet {
+    #[serde(rename = "@timestep")]
+    timestep: String,
+    #[serde(rename = "@file")]
+    file: String,
+}
+
+/// The `.pvd`'s (time, file) pairs.
+fn read_pvd(path: &Path) -> Vec<(f64, PathBuf)> {
+    let pvd: Pvd = quick_xml::de::from_str(&fs::read_to_string(path).unwrap()).unwrap();
+    assert_eq!(pvd.kind, "Collection");
+    let dir = path.parent().unwrap();
+    pvd.collection
+        .data_sets
+        .iter()
+        .map(|d| (d.timestep.parse().unwrap(), dir.join(&d.file)))
+        .collect()
+}
+
+/// The single inline piece of a `.vtp`.
+fn read_vtp(path: &Path) -> PolyDataPiece {
+    let vtk = Vtk::import(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    let DataSet::PolyData { mut pieces, .. } = vtk.data else {
+        panic!("{}: not PolyData", path.display())
+    };
+    assert_eq!(pieces.len(), 1, "{}", path.display());
+    match pieces.remove(0) {
+        Piece::Inline(p) => *p,
+        _ => panic!("{}: piece not inline", path.display()),
+    }
+}
+
+fn array<'a>(attrs: &'a [Attribute], name: &str) -> &'a IOBuffer {
+    attrs
+        .iter()
+        .find_map(|a| match a {
+            Attribute::DataArray(d) if d.name == name => Some(&d.data),
+            _ => None,
+        })
+        .unwrap_or_else(|| panic!("no array {name}"))
+}
+
+fn f64s(b: &IOBuffer) -> Vec<f64> {
+    match b {
+        IOBuffer::F64(v) => v.clone(),
+        other => panic!("not Float64: {other:?}"),
+    }
+}
+
+fn i32s(b: &IOBuffer) -> Vec<i32> {
+    match b {
+        IOBuffer::I32(v) => v.clone(),
+        other => panic!("not Int32: {other:?}"),
+    }
+}
+
+fn bits(v: &[f64]) -> Vec<u64> {
+    v.iter().map(|x| x.to_bits()).collect()
+}
+
+/// Checks every file of the series at `pvd` against `frames`, bit for bit.
+fn check_series(frames: &Frames, pvd: &Path) {
+    let n = frames.n_nodes();
+    let (nb, nc) = (frames.bars.len(), frames.cables.len());
+    let listed = read_pvd(pvd);
+    assert_eq!(listed.len(), frames.len(), "one DataSet per time");
+    for (k, (t, file)) in listed.iter().enumerate() {
+        assert_eq!(t.to_bits(), frames.times[k].to_bits(), "timestep {k}");
+        let name = pvd.file_stem().unwrap().to_str().unwrap();
+        assert_eq!(
+            file.file_name().unwrap().to_str().unwrap(),
+            format!("{name}_{k:04}.vtp")
+        );
+        let piece = read_vtp(file);
+        assert_eq!(piece.num_points(), n);
+        let points = f64s(&piece.points);
+        let want: Vec<f64> = frames.positions[k].iter().flatten().copied().collect();
+        assert_eq!(bits(&points), bits(&want), "points at t = {t}");
+
+        let Some(VertexNumbers::XML {
+            connectivity,
+            offsets,
+        }) = piece.lines.clone()
+        else {
+            panic!("no lines at t = {t}")
+        };
+        assert_eq!(offsets.len(), nb + nc, "one line per member");
+        let want: Vec<u64> = frames
+            .bars
+            .iter()
+            .chain(&frames.cables)
+            .flatten()
+            .map(|&i| i as u64)
+            .collect();
+        assert_eq!(connectivity, want, "bars first, then cables");
+        assert_eq!(
+            offsets,
+            (1..=(nb + nc) as u64).map(|m| 2 * m).collect::<Vec<_>>()
+        );
+        assert!(piece.polys.is_none() && piece.verts.is_none() && piece.strips.is_none());
+
+        let cell = &piece.data.cell;
+        let kind = i32s(array(cell, "kind"));
+        assert_eq!(kind, [vec![0; nb], vec![1; nc]].concat());
+        let number = i32s(array(cell, "number"));
+        let want: Vec<i32> = (1..=nb as i32).chain(1..=nc as i32).collect();
+        assert_eq!(number, want);
+        let tension = f64s(array(cell, "tension"));
+        assert_eq!(
+            bits(&tension[nb..]),
+            bits(&frames.tensions[k]),
+            "cable tensions at t = {t}"
+        );
+        let minus_bar_force: Vec<f64> = frames.bar_forces[k].iter().map(|f| -f).collect();
+        assert_eq!(
+            bits(&tension[..nb]),
+            bits(&minus_bar_force),
+            "bar tensions (minus the bar force) at t = {t}"
+        );
+
+        let point = &piece.data.point;
+        let velocity = f64s(array(point, "velocity"));
+        let want: Vec<f64> = frames.velocities[k].iter().flatten().copied().collect();
+        assert_eq!(bits(&velocity), bits(&want), "velocities at t = {t}");
+        assert_eq!(
+            i32s(array(point, "node")),
+            (1..=n as i32).collect::<Vec<_>>()
+        );
+        let pinned = i32s(array(point, "pinned"));
+        let want: Vec<i32> = (0..n)
+            .map(|i| i32::from(frames.pinned.contains(&i)))
+            .collect();
+        assert_eq!(pinned, want);
+    }
+}
+
+/// Writes what the pytest compares against: the values straight from the simulation.
+fn write_expected(frames: &Frames, path: &Path) {
+    let json = serde_json::json!({
+        "n_nodes": frames.n_nodes(),
+        "bars": frames.bars,
+        "cables": frames.cables,
+        "pinned": frames.pinned,
+        "times": frames.times,
+        "positions": frames.positions,
+        "velocities": frames.velocities,
+        "tensions": frames.tensions,
+        "bar_forces": frames.bar_forces,
+    });
+    fs::write(path, serde_json::to_string(&json).unwrap()).unwrap();
+}
+
+fn times(n: usize, dt: f64) -> Vec<f64> {
+    (0..=n).map(|k| k as f64 * dt).collect()
+}
+
+#[test]
+fn icosahedron_under_a_load_reads_back_bit_for_bit() {
+    // 20 N along x on node 4 (a force input) moves the structure and changes every tension.
+    let frames = record("icosahedron", [20.0, 0.0, 0.0], &times(12, 0.05));
+    let (t0, tn) = (&frames.tensions[0], frames.tensions.last().unwrap());
+    assert!(t0.iter().all(|&t| t > 0.0), "prestressed: {t0:?}");
+    assert!(
+        t0.iter().zip(tn).any(|(a, b)| (a - b).abs() > 0.1),
+        "the load acts"
+    );
+    let dir = out_dir();
+    let pvd = dir.join("icosahedron.pvd");
+    write_pvd(&frames, &pvd).unwrap();
+    write_expected(&frames, &dir.join("icosahedron_expected.json"));
+    assert!(dir.join("icosahedron_vtp").is_dir());
+    check_series(&frames, &pvd);
+}
+
+#[test]
+fn prism2_elastic_at_rest_reads_back_bit_for_bit() {
+    let frames = record("prism2-elastic", [0.0; 3], &times(10, 0.1));
+    assert_eq!(
+        (frames.bars.len(), frames.cables.len(), frames.n_nodes()),
+        (6, 15, 9)
+    );
+    assert!(!frames.pinned.is_empty());
+    let dir = out_dir();
+    let pvd = dir.join("prism2-elastic.pvd");
+    write_pvd(&frames, &pvd).unwrap();
+    write_expected(&frames, &dir.join("prism2-elastic_expected.json"));
+    check_series(&frames, &pvd);
+}
+
+/// The names of the entries of `dir` (sorted).
+fn entries(dir: &Path) -> Vec<String> {
+    let mut v: Vec<String> = fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().into_string().unwrap())
+        .collect();
+    v.sort();
+    v
+}
+
+#[test]
+fn a_second_write_replaces_the_series_and_failures_leave_nothing() {
+    let dir = out_dir().join("replace");
+    let _ = fs::remove_dir_all(&dir);
+    fs::create_dir_all(&dir).unwrap();
+    let pvd = dir.join("run.pvd");
+    let long = record("prism2-elastic", [0.0; 3], &times(5, 0.1));
+    write_pvd(&long, &pvd).unwrap();
+    assert_eq!(entries(&dir.join("run_vtp")).len(), 6);
+
+    // A shorter run replaces the whole series: no stale sixth file.
+    let short = record("icosahedron", [5.0, 0.0, 0.0], &times(2, 0.1));
+    write_pvd(&short, &pvd).unwrap();
+    assert_eq!(
+        entries(&dir.join("run_vtp")),
+        ["run_0000.vtp", "run_0001.vtp", "run_0002.vtp"]
+    );
+    check_series(&short, &pvd);
+    assert_eq!(entries(&dir), ["run.pvd", "run_vtp"], "no temporary left");
+
+    // Inconsistent frames: refused before anything is written; the old series stays.
+    let mut broken = long.clone();
+    broken.tensions[3].pop();
+    let err = write_pvd(&broken, &pvd).unwrap_err();
+    assert!(err.contains("inconsistent frames"), "{err}");
+    assert_eq!(entries(&dir), ["run.pvd", "run_vtp"]);
+    check_series(&short, &pvd);
+
+    // A folder of someone else's files is not replaced.
+    fs::write(dir.join("run_vtp/notes.txt"), "mine").unwrap();
+    let err = write_pvd(&long, &pvd).unwrap_err();
+    assert!(
+        err.contains("run_vtp") && err.contains("notes.txt"),
+        "{err}"
+    );
+    assert!(dir.join("run_vtp/notes.txt").is_file());
+    check_series(&short, &pvd);
+
+    // Wrong extension, missing folder, unwritable folder: the path and the reason.
+    let err = write_pvd(&long, &dir.join("run.vtk")).unwrap_err();
+    assert!(err.contains("run.vtk") && err.contains(".pvd"), "{err}");
+    let err = write_pvd(&long, &dir.join("nowhere/run.pvd")).unwrap_err();
+    assert!(err.contains("nowhere"), "{err}");
+    // A file where the temporary folder goes makes the write fail: nothing is left.
+    let blocked = dir.join("blocked");
+    fs::create_dir(&blocked).unwrap();
+    let squatter = format!(".x_vtp.tmp-{}", std::process::id());
+    fs::write(blocked.join(&squatter), "").unwrap();
+    let err = write_pvd(&long, &blocked.join("x.pvd")).unwrap_err();
+    assert!(err.contains(&squatter), "{err}");
+    assert_eq!(entries(&blocked), [squatter]);
+}
