@@ -339,3 +339,35 @@ fn a_second_write_replaces_the_series_and_failures_leave_nothing() {
     assert!(err.contains(&squatter), "{err}");
     assert_eq!(entries(&blocked), [squatter]);
 }
+
+/// The figures for the README: tower20, 10 s at 30 frames per second (301 files).
+/// `cargo test --release --test render_vtk -- --nocapture tower20`
+#[test]
+fn tower20_ten_seconds_at_30_fps() {
+    let times: Vec<f64> = (0..=300).map(|k| k as f64 / 30.0).collect();
+    let frames = record("tower20", [5.0, 0.0, 0.0], &times);
+    let dir = out_dir();
+    let pvd = dir.join("tower20.pvd");
+    let start = std::time::Instant::now();
+    write_pvd(&frames, &pvd).unwrap();
+    let seconds = start.elapsed().as_secs_f64();
+    let vtp = entries(&dir.join("tower20_vtp"));
+    assert_eq!(vtp.len(), 301);
+    let sizes: Vec<u64> = vtp
+        .iter()
+        .map(|f| fs::metadata(dir.join("tower20_vtp").join(f)).unwrap().len())
+        .collect();
+    let total: u64 = sizes.iter().sum();
+    println!(
+        "tower20, 10 s at 30 fps: {} nodes, {} bars, {} cables; {} .vtp of {} bytes each, \
+         {:.2} MB in all, .pvd {} bytes; written in {seconds:.3} s",
+        frames.n_nodes(),
+        frames.bars.len(),
+        frames.cables.len(),
+        vtp.len(),
+        sizes[0],
+        total as f64 / 1e6,
+        fs::metadata(&pvd).unwrap().len(),
+    );
+    check_series(&frames, &pvd);
+}
