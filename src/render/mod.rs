@@ -3,5 +3,6 @@
 //! series. The drawing modules read only [`Frames`]; nothing here touches the physics.
 
 mod frames;
+pub mod html;
 
 pub use frames::{Frames, GroundPlane};
