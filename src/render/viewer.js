@@ -13,7 +13,7 @@
     node: "#2d3440",
     pinned: "#c92a2a",
     pointMass: "#7b2fbf",
-    slack: "#9aa0a8",
+    slack: "#96a0b0",            // rgb(150, 160, 176)
     ground: "rgba(120, 134, 107, 0.18)",
     groundLine: "rgba(90, 104, 80, 0.35)",
     highlight: "#e8590c"
@@ -193,9 +193,10 @@
   function draw() {
     if (!W) return;
     updateBasis();
-    ctx.setTransform(DPR, 0, 0, DPR, 0, 0);
+    ctx.setTransform(1, 0, 0, 1, 0, 0);
     ctx.fillStyle = STYLE.background;
-    ctx.fillRect(0, 0, W, H);
+    ctx.fillRect(0, 0, canvas.width, canvas.height);
+    ctx.setTransform(DPR, 0, 0, DPR, 0, 0);
     drawGround();
 
     var camPos = [];
