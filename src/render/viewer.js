@@ -51,6 +51,16 @@
   var center0 = [(lo[0] + hi[0]) / 2, (lo[1] + hi[1]) / 2, (lo[2] + hi[2]) / 2];
   var radius = Math.max(1e-6, 0.5 * Math.hypot(hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]));
   if (maxTension <= 0) maxTension = 1;
+  // Typical member length (median of the bars' start lengths, else of all members): sets
+  // the drawn thickness so a tall tower of short bars is not drawn as one blob.
+  var memberLength = (function () {
+    var list = (NB ? D.bars : D.cables).map(function (e) {
+      var P = D.positions[0] || [];
+      return Math.hypot(num(P[3 * e[1]]) - num(P[3 * e[0]]), num(P[3 * e[1] + 1]) - num(P[3 * e[0] + 1]),
+                        num(P[3 * e[1] + 2]) - num(P[3 * e[0] + 2]));
+    }).filter(function (l) { return l > 0; }).sort(function (a, b) { return a - b; });
+    return list.length ? Math.min(list[list.length >> 1], 2 * radius) : radius;
+  })();
   var pinned = {}, masses = {};
   D.pinned.forEach(function (n) { pinned[n] = true; });
   D.point_masses.forEach(function (n) { masses[n] = true; });
@@ -206,8 +216,8 @@
       camPos.push(q);
       screen.push(q[2] >= NEAR * radius && isFinite(q[0] + q[1] + q[2]) ? camToScreen(q) : null);
     }
-    var scale = basis.focal / cam.dist * radius; // pixels per structure radius
-    var barWidth = Math.max(4, Math.min(14, scale * 0.045));
+    var barWidth = memberPixels() * 0.05;
+    barWidth = Math.max(2.5, Math.min(12, barWidth));
     var cableWidth = Math.max(1.6, Math.min(4, barWidth * 0.38));
 
     var segs = [];
@@ -254,7 +264,7 @@
     var order = [];
     for (i = 0; i < N; i++) if (screen[i]) order.push(i);
     order.sort(function (x, y) { return screen[y][2] - screen[x][2]; });
-    var r0 = Math.max(3, barWidth * 0.55);
+    var r0 = Math.max(2.2, barWidth * 0.6);
     order.forEach(function (i) {
       var p = screen[i], hl = isSel("node", i);
       if (pinned[i]) {
@@ -284,6 +294,9 @@
     });
     drawAxes();
   }
+
+  // Pixels of a typical member seen at the view's distance.
+  function memberPixels() { return basis.focal / cam.dist * memberLength; }
 
   function drawAxes() {
     // A small orientation triad in the lower-right corner.
@@ -319,7 +332,7 @@
       var p = screen[i];
       if (!p) continue;
       var d = Math.hypot(px - p[0], py - p[1]);
-      var reach = masses[i] ? 12 : 9;
+      var reach = masses[i] ? 12 : 8;
       if (d <= reach && (!best || d < best.d - 2 || (Math.abs(d - best.d) <= 2 && p[2] < best.z))) {
         best = { kind: "node", index: i, d: d, z: p[2] };
       }
@@ -337,7 +350,7 @@
         }
       });
     }
-    var barReach = Math.max(7, Math.max(4, Math.min(14, basis.focal / cam.dist * radius * 0.045)) / 2 + 2);
+    var barReach = Math.max(6, Math.max(2.5, Math.min(12, memberPixels() * 0.05)) / 2 + 2);
     consider("bar", D.bars, barReach);
     if (cand) return { kind: cand.kind, index: cand.index };
     consider("cable", D.cables, 7);

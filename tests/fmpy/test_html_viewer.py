@@ -349,11 +349,11 @@ def test_screenshots(open_page, pages):
     drv.get(pages["tower20"].as_uri())
     assert drv.find_element("id", "summary").text.endswith("301 frames")
     js(drv, "viewer.setFrame(150);")
-    s = canvas_stats(drv)
-    assert s["bars"] > 2000, s
     shot = OUT / "tower20-viewer.png"
     drv.save_screenshot(str(shot))
     assert shot.stat().st_size > 10_000
+    s = canvas_stats(drv)
+    assert s["bars"] > 500, s  # 60 thin bars
 
 
 def test_hostile_name_is_only_text(open_page, pages):
