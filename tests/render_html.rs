@@ -195,6 +195,23 @@ fn hostile_scene_name_stays_text() {
 }
 
 #[test]
+fn run_without_frames_still_makes_a_page() {
+    let mut frames = prism2_frames();
+    frames.name = "empty".to_string();
+    frames.times.clear();
+    frames.positions.clear();
+    frames.velocities.clear();
+    frames.tensions.clear();
+    frames.bar_forces.clear();
+    let html = page(&frames);
+    let d = embedded(&html);
+    assert_eq!(d["n_nodes"], 0);
+    assert_eq!(d["times"], serde_json::json!([]));
+    assert_eq!(d["bars"].as_array().unwrap().len(), 6);
+    std::fs::write(out_dir().join("empty.html"), &html).unwrap();
+}
+
+#[test]
 fn tower20_ten_seconds_at_30_fps() {
     let scene = builtin("tower20").unwrap();
     let started = Instant::now();

@@ -208,6 +208,15 @@
     ctx.fillRect(0, 0, canvas.width, canvas.height);
     ctx.setTransform(DPR, 0, 0, DPR, 0, 0);
     drawGround();
+    if (!NF || !N) {
+      ctx.fillStyle = "#5c6675";
+      ctx.font = "16px sans-serif";
+      ctx.textAlign = "center";
+      ctx.fillText("no recorded frames", W / 2, H / 2);
+      ctx.textAlign = "start";
+      screen = [];
+      return;
+    }
 
     var camPos = [];
     screen = [];

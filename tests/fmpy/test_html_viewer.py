@@ -41,7 +41,7 @@ def pages():
     subprocess.run(
         ["cargo", "test", "--release", "--test", "render_html"], cwd=REPO, check=True
     )
-    paths = {name: OUT / f"{name}.html" for name in ["prism2", "tower20", "hostile"]}
+    paths = {name: OUT / f"{name}.html" for name in ["prism2", "tower20", "hostile", "empty"]}
     for p in paths.values():
         assert p.is_file(), f"{p} was not written by tests/render_html.rs"
     return paths
@@ -367,3 +367,15 @@ def test_hostile_name_is_only_text(open_page, pages):
     assert js(drv, "return document.scripts.length;") == 2
     with pytest.raises(NoAlertPresentException):
         drv.switch_to.alert.text
+
+
+def test_run_without_frames_shows_a_note(open_page, pages):
+    drv = open_page(pages["empty"])
+    assert js(drv, "return viewer.frameCount;") == 0
+    assert drv.find_element("id", "summary").text == "0 nodes · 6 bars · 15 cables · 0 frames"
+    s = canvas_stats(drv)
+    assert s["drawn"] > 0 and s["bars"] == 0, s  # the ground and the note, no structure
+    drv.find_element("id", "play").click()
+    assert js(drv, "return viewer.playing();") is False
+    pointer_to(drv, 300, 200)
+    assert status(drv) == "hover or click a node, bar or cable"
