@@ -12,6 +12,14 @@ if ! dpkg -s libclang-dev >/dev/null 2>&1; then
   DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq libclang-dev >/dev/null
 fi
 
+# Headless Chromium and its WebDriver for tests/fmpy/test_html_viewer.py (the HTML viewer).
+if ! dpkg -s chromium chromium-driver >/dev/null 2>&1; then
+  echo "== installing chromium and chromium-driver (the HTML viewer's browser test)"
+  SUDO=""; [ "$(id -u)" -eq 0 ] || SUDO="sudo"
+  $SUDO apt-get update -qq
+  DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq chromium chromium-driver >/dev/null
+fi
+
 if [ ! -x .venv/bin/python ]; then
   echo "== creating .venv"
   python3 -m venv .venv

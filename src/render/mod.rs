@@ -4,5 +4,6 @@
 
 mod frames;
 pub mod vtk;
+pub mod html;
 
 pub use frames::{Frames, GroundPlane};

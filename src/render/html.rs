@@ -1,0 +1,215 @@
+//! One self-contained interactive HTML page of a run: a canvas viewer written for this
+//! page (`viewer.js`, `viewer.css`, inlined) and the run embedded as JSON. The page loads
+//! nothing at view time: no network, no external script, style or font.
+
+use serde::Serialize;
+
+use super::{Frames, GroundPlane};
+
+const VIEWER_JS: &str = include_str!("viewer.js");
+const VIEWER_CSS: &str = include_str!("viewer.css");
+
+/// The id of the `<script type="application/json">` element holding the run.
+pub const DATA_ELEMENT_ID: &str = "run-data";
+
+/// The run as the page's script reads it. Per-frame values are flattened and stored as
+/// `f32` (about 7 significant digits: far below a pixel, and half the page size of `f64`);
+/// times stay `f64` so the clock shows them exactly.
+#[derive(Serialize)]
+struct PageData<'a> {
+    name: &'a str,
+    n_nodes: usize,
+    bars: &'a [[usize; 2]],
+    cables: &'a [[usize; 2]],
+    pinned: &'a [usize],
+    point_masses: &'a [usize],
+    ground: Option<&'a GroundPlane>,
+    times: &'a [f64],
+    /// `positions[k][3 i + c]`, m.
+    positions: Vec<Vec<f32>>,
+    /// `velocities[k][3 i + c]`, m/s.
+    velocities: Vec<Vec<f32>>,
+    /// `tensions[k][j]`, N.
+    tensions: Vec<Vec<f32>>,
+    /// `bar_forces[k][b]`, N, compression positive.
+    bar_forces: Vec<Vec<f32>>,
+}
+
+fn flat(frames: &[Vec<[f64; 3]>]) -> Vec<Vec<f32>> {
+    frames
+        .iter()
+        .map(|f| f.iter().flatten().map(|&v| v as f32).collect())
+        .collect()
+}
+
+fn narrow(frames: &[Vec<f64>]) -> Vec<Vec<f32>> {
+    frames
+        .iter()
+        .map(|f| f.iter().map(|&v| v as f32).collect())
+        .collect()
+}
+
+/// The run as JSON that is safe inside a `<script>` element: every `<` (which JSON allows
+/// only inside strings) is written `\u003c`, so no `</script>` or `<!--` can appear; the
+/// line and paragraph separators are escaped too. Non-finite numbers become `null`.
+pub fn embedded_json(frames: &Frames) -> String {
+    let data = PageData {
+        name: &frames.name,
+        n_nodes: frames.n_nodes(),
+        bars: &frames.bars,
+        cables: &frames.cables,
+        pinned: &frames.pinned,
+        point_masses: &frames.point_masses,
+        ground: frames.ground.as_ref(),
+        times: &frames.times,
+        positions: flat(&frames.positions),
+        velocities: flat(&frames.velocities),
+        tensions: narrow(&frames.tensions),
+        bar_forces: narrow(&frames.bar_forces),
+    };
+    let json = serde_json::to_string(&data).expect("plain data serializes");
+    json.replace('<', "\\u003c")
+        .replace('\u{2028}', "\\u2028")
+        .replace('\u{2029}', "\\u2029")
+}
+
+/// Text escaped for HTML element content and attribute values.
+fn escape_html(text: &str) -> String {
+    let mut out = String::with_capacity(text.len());
+    for c in text.chars() {
+        match c {
+            '&' => out.push_str("&amp;"),
+            '<' => out.push_str("&lt;"),
+            '>' => out.push_str("&gt;"),
+            '"' => out.push_str("&quot;"),
+            '\'' => out.push_str("&#39;"),
+            _ => out.push(c),
+        }
+    }
+    out
+}
+
+/// One self-contained HTML page showing the run: orbit (drag), zoom (wheel), pan
+/// (shift-drag), play/pause and a time slider; bars thick, cables coloured by tension with
+/// a legend (slack cables dashed grey), pinned nodes and point masses marked, the ground
+/// plane drawn when present, and hover or click to identify a node, bar or cable by its
+/// 1-based number. The page's script exposes `window.viewer` for scripted checks.
+pub fn page(frames: &Frames) -> String {
+    let json = embedded_json(frames);
+    let name = escape_html(&frames.name);
+    let mut html = String::with_capacity(json.len() + VIEWER_JS.len() + VIEWER_CSS.len() + 4096);
+    html.push_str("<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n");
+    html.push_str("<meta name=\"viewport\" content=\"width=device-width, initial-scale=1\">\n");
+    html.push_str(&format!("<title>{name} · tensegrity-fmu</title>\n"));
+    html.push_str("<style>\n");
+    html.push_str(VIEWER_CSS);
+    html.push_str("</style>\n</head>\n<body>\n");
+    html.push_str(&format!(
+        "<header><h1 id=\"scene-name\">{name}</h1><span id=\"summary\"></span></header>\n"
+    ));
+    html.push_str(concat!(
+        "<main id=\"stage\">\n",
+        "<canvas id=\"view\" tabindex=\"0\" aria-label=\"3-D view of the structure\"></canvas>\n",
+        "<div id=\"tooltip\" hidden></div>\n",
+        "<aside id=\"legend\"></aside>\n",
+        "<div id=\"help\">drag: orbit · shift-drag: pan · wheel: zoom · double-click: reset · ",
+        "space: play/pause · ←/→: step</div>\n",
+        "</main>\n",
+        "<footer id=\"controls\">\n",
+        "<button id=\"play\" type=\"button\">Play</button>\n",
+        "<input id=\"time\" type=\"range\" min=\"0\" max=\"0\" step=\"1\" value=\"0\" ",
+        "aria-label=\"time\">\n",
+        "<output id=\"clock\">t = 0 s</output>\n",
+        "<label>speed <select id=\"speed\">",
+        "<option value=\"0.1\">0.1×</option><option value=\"0.25\">0.25×</option>",
+        "<option value=\"0.5\">0.5×</option><option value=\"1\" selected>1×</option>",
+        "<option value=\"2\">2×</option></select></label>\n",
+        "<span id=\"status\">hover or click a node, bar or cable</span>\n",
+        "</footer>\n",
+    ));
+    html.push_str(&format!(
+        "<script type=\"application/json\" id=\"{DATA_ELEMENT_ID}\">{json}</script>\n"
+    ));
+    html.push_str("<script>\n");
+    html.push_str(VIEWER_JS);
+    html.push_str("</script>\n</body>\n</html>\n");
+    html
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn tiny(name: &str) -> Frames {
+        Frames {
+            name: name.to_string(),
+            bars: vec![[0, 1]],
+            cables: vec![[1, 2], [2, 0]],
+            pinned: vec![0],
+            point_masses: vec![1],
+            ground: Some(GroundPlane {
+                normal: [0.0, 0.0, 1.0],
+                height: -0.5,
+            }),
+            times: vec![0.0, 0.1],
+            positions: vec![
+                vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]],
+                vec![[0.0, 0.0, 0.0], [1.0, 0.25, 0.0], [0.0, 1.0, 0.5]],
+            ],
+            velocities: vec![vec![[0.0; 3]; 3]; 2],
+            tensions: vec![vec![3.0, 0.0], vec![f64::NAN, 2.5]],
+            bar_forces: vec![vec![1.0], vec![-1.5]],
+        }
+    }
+
+    fn data(page: &str) -> serde_json::Value {
+        let open = format!("<script type=\"application/json\" id=\"{DATA_ELEMENT_ID}\">");
+        let start = page.find(&open).expect("data element") + open.len();
+        let len = page[start..].find("</script>").expect("closed");
+        serde_json::from_str(&page[start..start + len]).expect("valid JSON")
+    }
+
+    #[test]
+    fn escapes_script_end_in_the_name() {
+        let evil = "</script><script>alert(1)</script><!-- & \u{2028}";
+        let page = page(&tiny(evil));
+        // Exactly the page's own two scripts, opened and closed once each.
+        assert_eq!(page.matches("<script").count(), 2);
+        assert_eq!(page.matches("</script>").count(), 2);
+        assert!(!page.contains("<script>alert"));
+        assert!(!page.contains("<!--"));
+        assert!(page.contains("<title>&lt;/script&gt;&lt;script&gt;alert(1)"));
+        // The name reads back exactly from the embedded JSON.
+        assert_eq!(data(&page)["name"], evil);
+    }
+
+    #[test]
+    fn embeds_the_run() {
+        let page = page(&tiny("tiny"));
+        let d = data(&page);
+        assert_eq!(d["n_nodes"], 3);
+        assert_eq!(d["bars"], serde_json::json!([[0, 1]]));
+        assert_eq!(d["cables"], serde_json::json!([[1, 2], [2, 0]]));
+        assert_eq!(d["pinned"], serde_json::json!([0]));
+        assert_eq!(d["point_masses"], serde_json::json!([1]));
+        assert_eq!(d["ground"]["height"], -0.5);
+        assert_eq!(d["times"], serde_json::json!([0.0, 0.1]));
+        assert_eq!(
+            d["positions"][1],
+            serde_json::json!([0.0, 0.0, 0.0, 1.0, 0.25, 0.0, 0.0, 1.0, 0.5])
+        );
+        assert_eq!(d["tensions"][1], serde_json::json!([null, 2.5]));
+        assert_eq!(d["bar_forces"][1], serde_json::json!([-1.5]));
+        assert!(page.contains("<h1 id=\"scene-name\">tiny</h1>"));
+    }
+
+    #[test]
+    fn loads_nothing_from_outside() {
+        let page = page(&tiny("tiny"));
+        for needle in [
+            "http://", "https://", "//cdn", "src=", "<link", "@import", "url(",
+        ] {
+            assert!(!page.contains(needle), "page contains {needle:?}");
+        }
+    }
+}

@@ -1,0 +1,241 @@
+//! The interactive HTML page of a simulated run (`render::html::page`): it embeds the run
+//! with the right counts and values, loads nothing from outside, and a hostile scene name
+//! cannot leave its script element. Writes `target/render-test/prism2.html` (read by
+//! tests/fmpy/test_html_viewer.py in headless Chromium) and `tower20.html` (10 s at 30 fps,
+//! whose size and generation time are printed).
+
+use std::path::PathBuf;
+use std::time::Instant;
+
+use nalgebra::Vector3;
+use tensegrity_fmu::render::html::{page, DATA_ELEMENT_ID};
+use tensegrity_fmu::render::{Frames, GroundPlane};
+use tensegrity_fmu::scene::{builtin, GroundSpec, PointMassSpec};
+use tensegrity_fmu::{Model, Scene, Simulation};
+
+fn out_dir() -> PathBuf {
+    let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("target/render-test");
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+/// Simulates `scene` for `duration` s, recording `fps` frames per second (and t = 0);
+/// `drive(sim, t)` sets the inputs before the run reaches each frame time.
+fn record(
+    scene: &Scene,
+    duration: f64,
+    fps: f64,
+    mut drive: impl FnMut(&mut Simulation, f64),
+) -> Frames {
+    let model = Model::new(scene).expect("scene builds");
+    let mut sim = Simulation::new(model);
+    let m = sim.model();
+    let mut frames = Frames {
+        name: scene.name.clone(),
+        bars: m.bars.iter().map(|b| b.nodes).collect(),
+        cables: m.cables.iter().map(|c| c.nodes).collect(),
+        pinned: (0..m.n_nodes()).filter(|&i| m.pinned[i]).collect(),
+        point_masses: scene.point_masses.iter().map(|p| p.node - 1).collect(),
+        ground: m.ground.as_ref().map(|g| GroundPlane {
+            normal: g.normal.into(),
+            height: g.height,
+        }),
+        times: vec![],
+        positions: vec![],
+        velocities: vec![],
+        tensions: vec![],
+        bar_forces: vec![],
+    };
+    let n = (duration * fps).round() as usize;
+    for k in 0..=n {
+        let t = k as f64 / fps;
+        if k > 0 {
+            sim.advance_to(t).expect("run steps");
+        }
+        drive(&mut sim, t);
+        sim.refresh();
+        let m = sim.model();
+        let p3 = |v: Vector3<f64>| [v.x, v.y, v.z];
+        frames.times.push(t);
+        frames
+            .positions
+            .push((0..m.n_nodes()).map(|i| p3(sim.node_position(i))).collect());
+        frames
+            .velocities
+            .push((0..m.n_nodes()).map(|i| p3(sim.node_velocity(i))).collect());
+        frames
+            .tensions
+            .push((0..m.cables.len()).map(|j| sim.cable_tension(j)).collect());
+        frames
+            .bar_forces
+            .push((0..m.bars.len()).map(|b| sim.bar_force(b)).collect());
+    }
+    frames
+}
+
+/// The JSON in the page's data element.
+fn embedded(page: &str) -> serde_json::Value {
+    let open = format!("<script type=\"application/json\" id=\"{DATA_ELEMENT_ID}\">");
+    let start = page.find(&open).expect("data element") + open.len();
+    let len = page[start..].find("</script>").expect("closed");
+    serde_json::from_str(&page[start..start + len]).expect("valid JSON")
+}
+
+/// prism2 with a ground plane under it, a point mass on node 8, a sideways sinusoidal push on
+/// node 7 (its force input) and cable 13's force density cut to 0 for 1 s ≤ t < 1.5 s (slack).
+fn prism2_frames() -> Frames {
+    let mut scene = builtin("prism2").unwrap();
+    scene.ground = Some(GroundSpec {
+        height: -0.05,
+        normal: [0.0, 0.0, 1.0],
+        stiffness: 1e4,
+        damping: 100.0,
+        friction: 0.0,
+        slip_velocity: 0.01,
+    });
+    scene
+        .point_masses
+        .push(PointMassSpec { node: 8, mass: 0.5 });
+    let model = Model::new(&scene).unwrap();
+    let slack = 12; // cable 13
+    let input = model.controlled.iter().position(|&j| j == slack).unwrap();
+    let start = model.controlled_start[input];
+    record(&scene, 3.0, 30.0, |sim, t| {
+        let f = 6.0 * (2.0 * std::f64::consts::PI * 0.8 * t).sin();
+        sim.inputs.node_force[0] = Vector3::new(f, 0.5 * f, 0.0);
+        sim.inputs.force_density[input] = if (1.0..1.5).contains(&t) { 0.0 } else { start };
+    })
+}
+
+#[test]
+fn prism2_page_embeds_the_run() {
+    let frames = prism2_frames();
+    let html = page(&frames);
+    let path = out_dir().join("prism2.html");
+    std::fs::write(&path, &html).unwrap();
+
+    let d = embedded(&html);
+    assert_eq!(d["name"], "prism2");
+    assert_eq!(d["n_nodes"], 9);
+    assert_eq!(d["bars"].as_array().unwrap().len(), 6);
+    assert_eq!(d["cables"].as_array().unwrap().len(), 15);
+    assert_eq!(d["bars"][0], serde_json::json!([0, 3]));
+    assert_eq!(d["pinned"], serde_json::json!([0, 1, 2]));
+    assert_eq!(d["point_masses"], serde_json::json!([7]));
+    assert_eq!(d["ground"]["height"], -0.05);
+    assert_eq!(d["ground"]["normal"], serde_json::json!([0.0, 0.0, 1.0]));
+    let times = d["times"].as_array().unwrap();
+    assert_eq!(times.len(), 91);
+    assert_eq!(times[90], 3.0);
+    for key in ["positions", "velocities"] {
+        let arr = d[key].as_array().unwrap();
+        assert_eq!(arr.len(), 91);
+        assert!(
+            arr.iter().all(|f| f.as_array().unwrap().len() == 27),
+            "{key}"
+        );
+    }
+    assert!(d["tensions"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .all(|f| f.as_array().unwrap().len() == 15));
+    assert!(d["bar_forces"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .all(|f| f.as_array().unwrap().len() == 6));
+    // Values as recorded (to f32 precision): node 7 at the last frame; cable 13 slack at
+    // t = 1.2 s (frame 36) only.
+    let last = &frames.positions[90][6];
+    for c in 0..3 {
+        let got = d["positions"][90][3 * 6 + c].as_f64().unwrap();
+        assert!(
+            (got - last[c]).abs() <= 1e-6 * (1.0 + last[c].abs()),
+            "{got} vs {}",
+            last[c]
+        );
+    }
+    assert_eq!(frames.tensions[36][12], 0.0);
+    assert_eq!(d["tensions"][36][12], 0.0);
+    assert!(
+        d["tensions"][90][12].as_f64().unwrap() > 1.0,
+        "taut again at the end"
+    );
+    assert!(
+        d["tensions"][0][12].as_f64().unwrap() > 1.0,
+        "taut at the start"
+    );
+    // The structure moves: the top node is elsewhere at the end.
+    let moved = (0..3).map(|c| (frames.positions[90][6][c] - frames.positions[0][6][c]).powi(2));
+    assert!(moved.sum::<f64>().sqrt() > 0.01);
+
+    for needle in ["http://", "https://", "src=", "<link", "@import", "url("] {
+        assert!(!html.contains(needle), "page contains {needle:?}");
+    }
+    assert!(html.contains("<title>prism2 · tensegrity-fmu</title>"));
+    assert_eq!(html.matches("<script").count(), 2);
+}
+
+#[test]
+fn hostile_scene_name_stays_text() {
+    let mut frames = prism2_frames();
+    frames.name = "</script><script>alert(1)</script>".to_string();
+    let html = page(&frames);
+    assert_eq!(
+        html.matches("<script").count(),
+        2,
+        "only the page's own scripts"
+    );
+    assert_eq!(html.matches("</script>").count(), 2);
+    assert!(!html.contains("<script>alert(1)"));
+    assert!(html.contains("&lt;/script&gt;&lt;script&gt;alert(1)&lt;/script&gt;"));
+    assert_eq!(embedded(&html)["name"], frames.name);
+    std::fs::write(out_dir().join("hostile.html"), &html).unwrap();
+}
+
+#[test]
+fn run_without_frames_still_makes_a_page() {
+    let mut frames = prism2_frames();
+    frames.name = "empty".to_string();
+    frames.times.clear();
+    frames.positions.clear();
+    frames.velocities.clear();
+    frames.tensions.clear();
+    frames.bar_forces.clear();
+    let html = page(&frames);
+    let d = embedded(&html);
+    assert_eq!(d["n_nodes"], 0);
+    assert_eq!(d["times"], serde_json::json!([]));
+    assert_eq!(d["bars"].as_array().unwrap().len(), 6);
+    std::fs::write(out_dir().join("empty.html"), &html).unwrap();
+}
+
+#[test]
+fn tower20_ten_seconds_at_30_fps() {
+    let scene = builtin("tower20").unwrap();
+    let started = Instant::now();
+    let frames = record(&scene, 10.0, 30.0, |sim, t| {
+        let f = 8.0 * (2.0 * std::f64::consts::PI * 0.5 * t).sin();
+        sim.inputs.node_force[0] = Vector3::new(f, 0.0, 0.0);
+    });
+    let simulated = started.elapsed();
+    let started = Instant::now();
+    let html = page(&frames);
+    let generated = started.elapsed();
+    std::fs::write(out_dir().join("tower20.html"), &html).unwrap();
+    println!(
+        "tower20, 10 s at 30 fps: {} frames, {} nodes, page {} bytes ({:.2} MB), generated in {:.3} s (simulation {:.2} s)",
+        frames.len(),
+        frames.n_nodes(),
+        html.len(),
+        html.len() as f64 / 1e6,
+        generated.as_secs_f64(),
+        simulated.as_secs_f64()
+    );
+    let d = embedded(&html);
+    assert_eq!(d["times"].as_array().unwrap().len(), 301);
+    assert_eq!(d["bars"].as_array().unwrap().len(), 60);
+    assert_eq!(d["cables"].as_array().unwrap().len(), frames.cables.len());
+    assert_eq!(d["n_nodes"], frames.n_nodes());
+}
