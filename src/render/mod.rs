@@ -3,7 +3,7 @@
 //! series. The drawing modules read only [`Frames`]; nothing here touches the physics.
 
 mod frames;
-pub mod vtk;
 pub mod html;
+pub mod vtk;
 
 pub use frames::{Frames, GroundPlane};
