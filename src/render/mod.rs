@@ -2,6 +2,10 @@
 //! output names), drawn as PNG/GIF pictures, an interactive HTML page or a ParaView time
 //! series. The drawing modules read only [`Frames`]; nothing here touches the physics.
 
+pub mod animation;
+mod csv;
 mod frames;
+pub mod picture;
+pub mod view;
 
 pub use frames::{Frames, GroundPlane};
