@@ -105,7 +105,7 @@ enum Command {
         #[arg(short, long)]
         output: PathBuf,
         /// Time of a still picture, s (default: --time, or 0).
-        #[arg(long)]
+        #[arg(long, allow_negative_numbers = true)]
         at: Option<f64>,
         /// Simulated time, s (default: --at for a picture, 2 for an animation).
         #[arg(long)]

@@ -184,7 +184,7 @@ pub fn draw_frame<DB: DrawingBackend>(
     let pos = &frames.positions[k];
     let px = |p: [f64; 3]| fit.to_pixel(project(p, az, el));
     let mid = |[a, b]: [usize; 2]| [0, 1, 2].map(|i| (pos[a][i] + pos[b][i]) / 2.0);
-    let (thin, thick) = if style.title { (2, 6) } else { (1, 4) };
+    let (thin, thick, r) = if style.title { (2, 6, 10) } else { (1, 3, 5) };
     if let Some(quad) = ground_quad(frames) {
         let corners: Vec<_> = quad.iter().map(|&p| px(p)).collect();
         area.draw(&Polygon::new(corners, GROUND_FILL.filled()))
@@ -239,7 +239,6 @@ pub fn draw_frame<DB: DrawingBackend>(
         ))
         .map_err(&err)?;
     }
-    let r = (thick as i32 + 4).max(6);
     for &i in &frames.pinned {
         let (x, y) = px(pos[i]);
         let tri = vec![(x, y), (x - r, y + 2 * r), (x + r, y + 2 * r)];
