@@ -10,6 +10,12 @@ use tensegrity_fmu::scene::builtin;
 
 /// The frames of a GIF: their delays (centiseconds) and the last frame as RGBA.
 fn decode(path: &std::path::Path) -> (Vec<u16>, Vec<u8>) {
+    let (delays, _, last) = decode_ends(path);
+    (delays, last)
+}
+
+/// The delays, the first frame and the last frame.
+fn decode_ends(path: &std::path::Path) -> (Vec<u16>, Vec<u8>, Vec<u8>) {
     let mut options = gif::DecodeOptions::new();
     options.set_color_output(gif::ColorOutput::RGBA);
     let mut dec = options
@@ -17,12 +23,17 @@ fn decode(path: &std::path::Path) -> (Vec<u16>, Vec<u8>) {
         .unwrap();
     assert_eq!((u32::from(dec.width()), u32::from(dec.height())), GIF_SIZE);
     let mut delays = Vec::new();
-    let mut last = Vec::new();
+    let (mut first, mut last) = (Vec::new(), Vec::new());
     while let Some(frame) = dec.read_next_frame().unwrap() {
+        assert_eq!((frame.left, frame.top), (0, 0));
+        assert_eq!((u32::from(frame.width), u32::from(frame.height)), GIF_SIZE);
         delays.push(frame.delay);
         last = frame.buffer.to_vec();
+        if first.is_empty() {
+            first = last.clone();
+        }
     }
-    (delays, last)
+    (delays, first, last)
 }
 
 #[test]
@@ -31,8 +42,11 @@ fn gif_has_one_frame_per_recorded_time() {
     let o = out.to_str().unwrap();
     let (ok, _, stderr) = run(&["render", "prism2", "-o", o, "--time", "1", "--fps", "10"]);
     assert!(ok, "{stderr}");
-    let (delays, last) = decode(&out);
+    let (delays, first, last) = decode_ends(&out);
     assert_eq!(delays.len(), 11, "0, 0.1, …, 1 s");
+    // Each frame is stamped with its time: the title band (top 40 rows) differs.
+    let band = 4 * GIF_SIZE.0 as usize * 40;
+    assert_ne!(first[..band], last[..band]);
     assert!(delays.iter().all(|&d| d == 10), "{delays:?}");
     // The last frame shows the structure (dark bar pixels), saved for a look.
     let dark = last

@@ -274,3 +274,71 @@ fn render_errors_name_the_option_and_the_fix() {
     );
     assert!(!std::path::Path::new(png).exists() && !gif.exists() && !html.exists());
 }
+
+#[test]
+fn pins_point_masses_and_the_ground_are_marked() {
+    // prism2: pinned nodes 1–3 get triangles; no ground.
+    let out = temp("pins.png");
+    let (ok, _, stderr) = run(&["render", "prism2", "-o", out.to_str().unwrap()]);
+    assert!(ok, "{stderr}");
+    let img = read_png(&out);
+    let d = drawn(Frames::from_run(&builtin("prism2").unwrap(), &[0.0]).unwrap());
+    assert_eq!(d.frames.pinned, [0, 1, 2]);
+    for &i in &d.frames.pinned {
+        let (x, y) = (d.px)(d.frames.positions[0][i]);
+        // The triangle hangs below its node.
+        assert!(
+            hits(&img, (x, y + 12), 3, rgb(picture::PIN)) > 10,
+            "pin {}",
+            i + 1
+        );
+    }
+    let ground = rgb(picture::GROUND_FILL);
+    assert_eq!(img.pixels().filter(|p| p.0 == ground).count(), 0);
+    // A dropped icosahedron with a payload on node 2 over a ground plane.
+    let mut text = tensegrity_fmu::Model::new(&builtin("icosahedron").unwrap())
+        .unwrap()
+        .explicit_scene()
+        .to_toml_string()
+        .replace("fixed = [1, 5, 9]", "gravity = [0.0, 0.0, -9.81]")
+        .replace("method = \"rk4\"", "method = \"dopri5\"");
+    text.push_str(
+        "\n[[point_masses]]\nnode = 2\nmass = 0.5\n\n[ground]\nheight = -0.8\nstiffness = 1e4\n",
+    );
+    let scene_path = temp("dropped.toml");
+    std::fs::write(&scene_path, &text).unwrap();
+    let out = temp("dropped.png");
+    let (ok, _, stderr) = run(&[
+        "render",
+        scene_path.to_str().unwrap(),
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    assert!(ok, "{stderr}");
+    let img = read_png(&out);
+    let scene = tensegrity_fmu::Scene::from_name_or_file(scene_path.to_str().unwrap()).unwrap();
+    let d = drawn(Frames::from_run(&scene, &[0.0]).unwrap());
+    assert!(d.frames.pinned.is_empty());
+    assert_eq!(d.frames.point_masses, [1]);
+    let mass = (d.px)(d.frames.positions[0][1]);
+    assert!(
+        hits(&img, mass, 5, rgb(BAR)) > 60,
+        "no filled circle at node 2"
+    );
+    // The ground quad's centre lies under the structure's centre, on the plane.
+    let quad = picture::ground_quad(&d.frames).unwrap();
+    assert!(quad.iter().all(|p| (p[2] + 0.8).abs() < 1e-12));
+    let centre = [0, 1, 2].map(|i| quad.iter().map(|p| p[i]).sum::<f64>() / 4.0);
+    let nodes = &d.frames.positions[0];
+    for i in 0..2 {
+        let mean = nodes.iter().map(|p| p[i]).sum::<f64>() / nodes.len() as f64;
+        assert!((centre[i] - mean).abs() < 1e-12);
+    }
+    let filled = img.pixels().filter(|p| p.0 == ground).count();
+    assert!(filled > 20_000, "{filled} ground pixels");
+    // Near each corner of the quad (out beyond the structure) the picture shows ground.
+    for corner in quad {
+        let inside = [0, 1, 2].map(|i| centre[i] + 0.9 * (corner[i] - centre[i]));
+        assert!(hits(&img, (d.px)(inside), 3, ground) > 0, "{corner:?}");
+    }
+}

@@ -21,8 +21,8 @@ pub const BAR: RGBColor = RGBColor(35, 35, 35);
 pub const SLACK: RGBColor = RGBColor(175, 175, 175);
 /// Pinned-node triangles.
 pub const PIN: RGBColor = RGBColor(120, 50, 160);
-/// The ground plane and its grid.
-const GROUND_FILL: RGBColor = RGBColor(236, 234, 222);
+/// The ground plane (filled) and its grid.
+pub const GROUND_FILL: RGBColor = RGBColor(236, 234, 222);
 const GROUND_GRID: RGBColor = RGBColor(196, 192, 172);
 
 /// Tension colour map from 0 (blue) to the run's largest tension (red).
