@@ -178,6 +178,12 @@ pub fn draw_frame<DB: DrawingBackend>(
     max_tension: f64,
     style: &Style,
 ) -> Result<(), String> {
+    if k >= frames.len() {
+        return Err(format!(
+            "no frame {k} to draw: the run has {} recorded times",
+            frames.len()
+        ));
+    }
     crate::report::register_font()?;
     let err = drawing::<DrawingAreaErrorKind<DB::ErrorType>>("the picture");
     let (az, el) = (style.azimuth, style.elevation);
