@@ -1,5 +1,5 @@
 //! Writes a `.fmu` archive: modelDescription.xml, the generic binary under the model
-//! identifier, the scene in `resources/` and the documentation.
+//! identifier, the scene in `resources/`, the documentation and the icon `model.png`.
 
 use std::io::Write;
 use std::path::Path;
@@ -13,6 +13,7 @@ use super::documentation::index_html;
 use super::variables::VariableTable;
 use super::{guid_for, BUILD_ID};
 use crate::model::Model;
+use crate::render::{picture, Frames};
 use crate::scene::Scene;
 use crate::sim::Simulation;
 
@@ -78,11 +79,15 @@ pub fn build_fmu(scene: &Scene, binary: &Path, out: &Path) -> Result<Built, Stri
         ));
     }
     let html = index_html(sim.model(), &table);
-    let entries: [(String, &[u8]); 4] = [
+    // The FMI 2.0 icon: the structure at its start.
+    let start = sim.time();
+    let icon = Frames::record(&mut sim, &[start]).and_then(|f| picture::icon_png(&f))?;
+    let entries: [(String, &[u8]); 5] = [
         ("modelDescription.xml".into(), xml.as_bytes()),
         (format!("binaries/linux64/{id}.so"), &so),
         ("resources/scene.toml".into(), scene_text.as_bytes()),
         ("documentation/index.html".into(), html.as_bytes()),
+        ("model.png".into(), &icon),
     ];
     write_atomically(out, &entries)?;
     Ok(Built {

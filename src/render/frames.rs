@@ -1,7 +1,13 @@
 //! A run as the renderers see it: the fixed topology and, per recorded time, node
 //! positions and velocities and cable tensions and bar forces.
 
+use std::path::Path;
+
 use serde::Serialize;
+
+use crate::model::Model;
+use crate::scene::Scene;
+use crate::sim::Simulation;
 
 /// The ground plane `normal · x = height`, where the scene has one.
 #[derive(Debug, Clone, PartialEq, Serialize)]
@@ -54,5 +60,151 @@ impl Frames {
     /// No recorded time.
     pub fn is_empty(&self) -> bool {
         self.times.is_empty()
+    }
+}
+
+impl Frames {
+    /// The topology of `model` with no recorded time.
+    pub fn topology(model: &Model) -> Self {
+        let scene = &model.scene;
+        let ground = model.ground.as_ref().map(|g| GroundPlane {
+            normal: [g.normal.x, g.normal.y, g.normal.z],
+            height: g.height,
+        });
+        Self {
+            name: scene.name.clone(),
+            bars: model.bars.iter().map(|b| b.nodes).collect(),
+            cables: model.cables.iter().map(|c| c.nodes).collect(),
+            pinned: (0..model.n_nodes()).filter(|&i| model.pinned[i]).collect(),
+            point_masses: scene.point_masses.iter().map(|p| p.node - 1).collect(),
+            ground,
+            times: Vec::new(),
+            positions: Vec::new(),
+            velocities: Vec::new(),
+            tensions: Vec::new(),
+            bar_forces: Vec::new(),
+        }
+    }
+
+    /// Simulates `scene` with its own solver settings and inputs at their start values,
+    /// recording at `times` (increasing, from 0).
+    pub fn from_run(scene: &Scene, times: &[f64]) -> Result<Self, String> {
+        let model = Model::new(scene).map_err(|e| e.to_string())?;
+        let mut sim = Simulation::new(model);
+        if let Some(why) = sim.step_size_problem() {
+            return Err(why);
+        }
+        Self::record(&mut sim, times)
+    }
+
+    /// Runs `sim` on from its current time, recording at `times` (increasing, none before
+    /// the simulation's time). The inputs are whatever `sim.inputs` holds.
+    pub fn record(sim: &mut Simulation, times: &[f64]) -> Result<Self, String> {
+        let mut frames = Self::topology(sim.model());
+        for &t in times {
+            if !(t.is_finite() && t >= sim.time()) {
+                return Err(format!(
+                    "cannot record at t = {t} s: times must be finite and increasing from {} s",
+                    sim.time()
+                ));
+            }
+            if t > sim.time() {
+                sim.advance_to(t)
+                    .map_err(|e| format!("the run stopped at t = {} s: {e}", sim.time()))?;
+            }
+            sim.refresh();
+            frames.push_state(sim);
+        }
+        Ok(frames)
+    }
+
+    fn push_state(&mut self, sim: &Simulation) {
+        let model = sim.model();
+        let vec3 = |v: nalgebra::Vector3<f64>| [v.x, v.y, v.z];
+        let nodes = 0..model.n_nodes();
+        self.times.push(sim.time());
+        self.positions
+            .push(nodes.clone().map(|i| vec3(sim.node_position(i))).collect());
+        self.velocities
+            .push(nodes.map(|i| vec3(sim.node_velocity(i))).collect());
+        self.tensions.push(
+            (0..model.cables.len())
+                .map(|j| sim.cable_tension(j))
+                .collect(),
+        );
+        self.bar_forces
+            .push((0..model.bars.len()).map(|b| sim.bar_force(b)).collect());
+    }
+
+    /// Reads a CSV written by `tensegrity-fmu simulate` or by fmpy for this scene; see
+    /// [`super::csv`]. Node positions are required; velocities, tensions and bar forces
+    /// without a column read as zeros.
+    pub fn from_csv(scene: &Scene, path: &Path) -> Result<Self, String> {
+        let model = Model::new(scene).map_err(|e| e.to_string())?;
+        super::csv::read(Self::topology(&model), model.n_nodes(), path)
+    }
+
+    /// The recorded time nearest to `t` (the first of equals).
+    pub fn nearest(&self, t: f64) -> Option<usize> {
+        (0..self.len()).min_by(|&a, &b| {
+            let (da, db) = ((self.times[a] - t).abs(), (self.times[b] - t).abs());
+            da.total_cmp(&db)
+        })
+    }
+
+    /// The frames at the given indices (in that order).
+    pub fn select(&self, keep: &[usize]) -> Self {
+        let pick = |v: &Vec<Vec<f64>>| keep.iter().map(|&k| v[k].clone()).collect();
+        let pick3 = |v: &Vec<Vec<[f64; 3]>>| keep.iter().map(|&k| v[k].clone()).collect();
+        Self {
+            times: keep.iter().map(|&k| self.times[k]).collect(),
+            positions: pick3(&self.positions),
+            velocities: pick3(&self.velocities),
+            tensions: pick(&self.tensions),
+            bar_forces: pick(&self.bar_forces),
+            ..self.topology_only()
+        }
+    }
+
+    /// The indices of the first recorded time at or after each multiple of `interval`
+    /// from the first time (a CSV written every step thinned to an animation's frame rate).
+    pub fn every(&self, interval: f64) -> Vec<usize> {
+        let mut keep = Vec::new();
+        let Some(&t0) = self.times.first() else {
+            return keep;
+        };
+        let mut k = 0u64;
+        for (i, &t) in self.times.iter().enumerate() {
+            let due = t0 + k as f64 * interval;
+            if t >= due - 1e-9 * interval {
+                keep.push(i);
+                k = ((t - t0) / interval + 1e-9).floor() as u64 + 1;
+            }
+        }
+        keep
+    }
+
+    /// The largest cable tension over the whole run, N (0 if none).
+    pub fn max_tension(&self) -> f64 {
+        self.tensions
+            .iter()
+            .flatten()
+            .fold(0.0, |m: f64, &t| if t.is_finite() { m.max(t) } else { m })
+    }
+
+    fn topology_only(&self) -> Self {
+        Self {
+            name: self.name.clone(),
+            bars: self.bars.clone(),
+            cables: self.cables.clone(),
+            pinned: self.pinned.clone(),
+            point_masses: self.point_masses.clone(),
+            ground: self.ground.clone(),
+            times: Vec::new(),
+            positions: Vec::new(),
+            velocities: Vec::new(),
+            tensions: Vec::new(),
+            bar_forces: Vec::new(),
+        }
     }
 }

@@ -2,8 +2,12 @@
 //! output names), drawn as PNG/GIF pictures, an interactive HTML page or a ParaView time
 //! series. The drawing modules read only [`Frames`]; nothing here touches the physics.
 
+pub mod animation;
+mod csv;
 mod frames;
 pub mod html;
+pub mod picture;
+pub mod view;
 pub mod vtk;
 
 pub use frames::{Frames, GroundPlane};

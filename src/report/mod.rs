@@ -43,6 +43,7 @@
 //! is longer all take the same steps, and the Markdown says so.
 
 mod plot;
+pub(crate) use plot::register_font;
 mod run;
 mod table;
 

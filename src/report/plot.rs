@@ -27,7 +27,8 @@ const SIZE: (u32, u32) = (1100, 750);
 /// Added to the upper end of a log₁₀ axis so that its last decade gets a tick.
 const EDGE: f64 = 1e-9;
 
-fn register_font() -> Result<(), String> {
+/// Registers the embedded font as "sans-serif" (once); the render pictures use it too.
+pub(crate) fn register_font() -> Result<(), String> {
     static DONE: OnceLock<bool> = OnceLock::new();
     let ok = *DONE.get_or_init(|| {
         plotters::style::register_font("sans-serif", FontStyle::Normal, FONT).is_ok()

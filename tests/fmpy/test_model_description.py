@@ -255,8 +255,11 @@ def test_archive_layout(builtin):
         f"binaries/linux64/{ident}.so",
         "resources/scene.toml",
         "documentation/index.html",
+        "model.png",
     ):
         assert required in names
+    with zipfile.ZipFile(builtin.path) as z:
+        assert z.read("model.png").startswith(b"\x89PNG\r\n\x1a\n")
     for n in names:
         assert not n.startswith("/") and not n.startswith("."), n
         assert "\\" not in n, n

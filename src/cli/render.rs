@@ -1,0 +1,178 @@
+//! `render`: draw a scene's run as a PNG picture or a GIF animation (the `.html` page and
+//! the `.pvd` ParaView series come with their modules). The run is simulated here with
+//! the scene's own solver settings, or read back from a CSV of `simulate` or fmpy.
+
+use std::path::{Path, PathBuf};
+
+use tensegrity_fmu::render::{animation, picture, Frames};
+use tensegrity_fmu::Scene;
+
+/// What `render` was asked for, beyond the scene.
+pub struct Request {
+    /// The picture to write; its extension picks the format.
+    pub output: PathBuf,
+    /// Time of a still picture, s.
+    pub at: Option<f64>,
+    /// Simulated time, s.
+    pub time: Option<f64>,
+    /// A recorded run instead of simulating.
+    pub csv: Option<PathBuf>,
+    /// Frames per second of an animation (also its recording interval, 1/fps s).
+    pub fps: f64,
+    /// Camera azimuth, degrees.
+    pub azimuth: f64,
+    /// Camera elevation, degrees.
+    pub elevation: f64,
+    /// Node, bar and cable numbers.
+    pub labels: bool,
+}
+
+/// Default simulated time of an animation, s.
+pub const ANIMATION_TIME: f64 = 2.0;
+
+enum Format {
+    Png,
+    Gif,
+    Html,
+    Pvd,
+}
+
+fn format_of(path: &Path) -> Result<Format, String> {
+    let ext = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(str::to_ascii_lowercase);
+    match ext.as_deref() {
+        Some("png") => Ok(Format::Png),
+        Some("gif") => Ok(Format::Gif),
+        Some("html") => Ok(Format::Html),
+        Some("pvd") => Ok(Format::Pvd),
+        _ => Err(format!(
+            "-o {}: unknown picture format; name the file with one of .png, .gif, .html, .pvd",
+            path.display()
+        )),
+    }
+}
+
+fn check(name: &str, v: f64, example: &str) -> Result<f64, String> {
+    if v.is_finite() {
+        Ok(v)
+    } else {
+        Err(format!(
+            "{name} must be a finite number (got {v}); pass e.g. {name} {example}"
+        ))
+    }
+}
+
+/// Renders and prints the written path.
+pub fn render(scene: Scene, r: Request) -> Result<(), String> {
+    let format = format_of(&r.output)?;
+    let azimuth = check("--azimuth", r.azimuth, "30")?;
+    let elevation = check("--elevation", r.elevation, "20")?;
+    if let Some(time) = r.time {
+        if !(time >= 0.0 && time.is_finite()) {
+            return Err(format!(
+                "--time must be zero or positive and finite (got {time}); pass e.g. --time 2"
+            ));
+        }
+    }
+    if let Some(at) = r.at {
+        check("--at", at, "0.5")?;
+    }
+    if !(r.fps > 0.0 && r.fps <= 100.0) {
+        return Err(format!(
+            "--fps must be above 0 and at most 100 (got {}); pass e.g. --fps 10",
+            r.fps
+        ));
+    }
+    if r.csv.is_some() && r.time.is_some() {
+        return Err("--time and --csv exclude each other: the CSV's rows are the run; drop --time (or --csv to simulate)".into());
+    }
+    let style = picture::Style::new(azimuth, elevation, r.labels);
+    match format {
+        Format::Png => {
+            let (frames, k) = still(&scene, &r)?;
+            picture::write_png(&frames, k, &style, &r.output)?;
+        }
+        Format::Gif => {
+            let frames = series(&scene, &r)?;
+            animation::write_gif(&frames, r.fps, &style, &r.output)?;
+        }
+        Format::Html => {
+            let page = tensegrity_fmu::render::html::page(&series(&scene, &r)?);
+            write_file(&r.output, page.as_bytes())?;
+        }
+        Format::Pvd => tensegrity_fmu::render::vtk::write_pvd(&series(&scene, &r)?, &r.output)?,
+    }
+    println!("{}", r.output.display());
+    Ok(())
+}
+
+/// Writes `bytes` beside `path` under a temporary name and renames it into place.
+fn write_file(path: &Path, bytes: &[u8]) -> Result<(), String> {
+    let name = path
+        .file_name()
+        .ok_or_else(|| format!("-o {}: not a file name", path.display()))?;
+    let mut partial = std::ffi::OsString::from(".");
+    partial.push(name);
+    partial.push(format!(".partial-{}", std::process::id()));
+    let partial = path.with_file_name(partial);
+    let written = std::fs::write(&partial, bytes)
+        .and_then(|()| std::fs::rename(&partial, path))
+        .map_err(|e| format!("cannot write {}: {e}", path.display()));
+    if written.is_err() {
+        let _ = std::fs::remove_file(&partial);
+    }
+    written
+}
+
+/// The run of a still picture and the index of the frame to draw.
+fn still(scene: &Scene, r: &Request) -> Result<(Frames, usize), String> {
+    if let Some(path) = &r.csv {
+        let frames = Frames::from_csv(scene, path)?;
+        let (t0, t1) = (frames.times[0], frames.times[frames.len() - 1]);
+        let at = r.at.unwrap_or(t0);
+        if at < t0 || at > t1 {
+            return Err(format!(
+                "--at {at} is outside the run in {}, which spans {t0} to {t1} s; pass --at between them",
+                path.display()
+            ));
+        }
+        let k = frames.nearest(at).unwrap_or(0);
+        return Ok((frames, k));
+    }
+    let at = r.at.unwrap_or(r.time.unwrap_or(0.0));
+    let time = r.time.unwrap_or(at.max(0.0));
+    if !(0.0..=time).contains(&at) {
+        return Err(format!(
+            "--at {at} is outside the run, which spans 0 to {time} s (--time); pass --at between them or a longer --time"
+        ));
+    }
+    Ok((Frames::from_run(scene, &[at])?, 0))
+}
+
+/// The run of an animation: recorded every 1/fps s from 0 to --time (and at --time), or
+/// the CSV's rows thinned to 1/fps s.
+fn series(scene: &Scene, r: &Request) -> Result<Frames, String> {
+    if r.at.is_some() {
+        return Err("--at is for still pictures (.png); an animation shows the whole run: drop --at, or set its length with --time".into());
+    }
+    let interval = 1.0 / r.fps;
+    if let Some(path) = &r.csv {
+        let frames = Frames::from_csv(scene, path)?;
+        return Ok(frames.select(&frames.every(interval)));
+    }
+    let time = r.time.unwrap_or(ANIMATION_TIME);
+    let frames = (time / interval + 1e-9).floor() as u64;
+    if frames > 10_000 {
+        return Err(format!(
+            "--time {time} at --fps {} would draw {frames} frames, more than 10000; lower --fps or shorten --time",
+            r.fps
+        ));
+    }
+    let mut times: Vec<f64> = (0..=frames).map(|k| k as f64 * interval).collect();
+    if time - times[times.len() - 1] > 1e-9 * interval {
+        times.push(time);
+    }
+    Frames::from_run(scene, &times)
+}
