@@ -226,6 +226,23 @@ fn every_built_fmu_carries_a_model_png_icon() {
         assert_eq!(img.dimensions(), picture::ICON_SIZE, "{name}");
         let bar = img.pixels().filter(|p| p.0 == rgb(BAR)).count();
         assert!(bar > 300, "{name}: {bar} bar pixels in model.png");
+        // the documentation shows the structure in the interactive viewer
+        let read = |zip: &mut zip::ZipArchive<std::fs::File>, entry: &str| {
+            let mut text = String::new();
+            std::io::Read::read_to_string(&mut zip.by_name(entry).expect(entry), &mut text)
+                .unwrap();
+            text
+        };
+        let index = read(&mut zip, "documentation/index.html");
+        assert!(index.contains("<iframe src=\"structure.html\""), "{name}");
+        let viewer = read(&mut zip, "documentation/structure.html");
+        assert!(viewer.contains(&format!("<title>{name}")), "{name}");
+        let model = tensegrity_fmu::Model::new(&builtin(name).unwrap()).unwrap();
+        let nodes = format!("\"n_nodes\":{}", model.n_nodes());
+        assert!(
+            viewer.contains(&nodes),
+            "{name}: the embedded run has every node"
+        );
     }
 }
 

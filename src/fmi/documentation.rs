@@ -76,6 +76,13 @@ pub fn index_html(model: &Model, table: &VariableTable) -> String {
         model.solver.step_size,
         if model.solver.correction { "on" } else { "off" },
     ));
+    h.push_str(
+        "<p>The structure at its start, in an interactive viewer (drag to orbit, wheel to \
+         zoom, hover or click to identify a node, bar or cable; \
+         <a href=\"structure.html\">open it on its own</a>):</p>\n\
+         <iframe src=\"structure.html\" title=\"the structure\" \
+         style=\"width:100%;height:34em;border:1px solid #ccc\"></iframe>\n",
+    );
     h.push_str("<p>Dynamics: Cheong, Skelton &amp; Cho (2014), non-minimal coordinates with the exact recursive bar-length and orthogonality correction after every internal step. Bar forces are positive in compression.</p>\n");
     h.push_str("<h2>Variables</h2>\n");
     let of = |c: Causality| -> Vec<&Variable> {

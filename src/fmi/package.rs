@@ -13,9 +13,12 @@ use super::documentation::index_html;
 use super::variables::VariableTable;
 use super::{guid_for, BUILD_ID};
 use crate::model::Model;
-use crate::render::{picture, Frames};
+use crate::render::{self, picture, Frames};
 use crate::scene::Scene;
 use crate::sim::Simulation;
+
+/// The interactive viewer of the structure, linked from `documentation/index.html`.
+pub const STRUCTURE_PAGE: &str = "documentation/structure.html";
 
 /// What [`build_fmu`] wrote.
 #[derive(Debug, Clone, PartialEq)]
@@ -79,14 +82,17 @@ pub fn build_fmu(scene: &Scene, binary: &Path, out: &Path) -> Result<Built, Stri
         ));
     }
     let html = index_html(sim.model(), &table);
-    // The FMI 2.0 icon: the structure at its start.
+    // The FMI 2.0 icon and the documentation's viewer: the structure at its start.
     let start = sim.time();
-    let icon = Frames::record(&mut sim, &[start]).and_then(|f| picture::icon_png(&f))?;
-    let entries: [(String, &[u8]); 5] = [
+    let at_start = Frames::record(&mut sim, &[start])?;
+    let icon = picture::icon_png(&at_start)?;
+    let viewer = render::html::page(&at_start);
+    let entries: [(String, &[u8]); 6] = [
         ("modelDescription.xml".into(), xml.as_bytes()),
         (format!("binaries/linux64/{id}.so"), &so),
         ("resources/scene.toml".into(), scene_text.as_bytes()),
         ("documentation/index.html".into(), html.as_bytes()),
+        (STRUCTURE_PAGE.into(), viewer.as_bytes()),
         ("model.png".into(), &icon),
     ];
     write_atomically(out, &entries)?;

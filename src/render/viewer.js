@@ -578,7 +578,9 @@
     });
   }
   document.getElementById("summary").textContent =
-    N + " nodes · " + NB + " bars · " + NC + " cables · " + NF + " frames";
+    [[N, "node"], [NB, "bar"], [NC, "cable"], [NF, "frame"]]
+      .map(([n, what]) => n + " " + what + (n === 1 ? "" : "s"))
+      .join(" · ");
   legend();
 
   // ---- scripted access (tests, console) --------------------------------------------------
