@@ -144,3 +144,36 @@ def test_first_frame_is_the_prestressed_equilibrium(series, name):
     free = point_array(pd, "pinned") == 0
     assert free.sum() > 0
     assert np.abs(force[free]).max() <= 1e-10 * np.abs(tension).max()
+
+
+def test_render_from_a_simulate_csv_carries_the_csv_tensions_and_positions(tmp_path):
+    """`render --csv` of a `simulate` run: every .vtp holds exactly the CSV's values (the
+    CSV's shortest round-trip decimals read back to the same doubles)."""
+    cli = REPO / "target" / "release" / "tensegrity-fmu"
+    csv_path = tmp_path / "ico.csv"
+    subprocess.run(
+        [str(cli), "simulate", "icosahedron", "--time", "0.5", "--interval", "0.1", "-o", str(csv_path)],
+        check=True, capture_output=True,
+    )
+    pvd = tmp_path / "ico.pvd"
+    subprocess.run(
+        [str(cli), "render", "icosahedron", "--csv", str(csv_path), "--fps", "10", "-o", str(pvd)],
+        check=True, capture_output=True,
+    )
+    header = csv_path.read_text().splitlines()[0].replace('"', "").split(",")
+    rows = np.loadtxt(csv_path, delimiter=",", skiprows=1)
+    col = {n: k for k, n in enumerate(header)}
+    cables = sorted(int(n[6:-9]) for n in header if n.startswith("cable[") and n.endswith("].tension"))
+    nodes = sorted({int(n[5 : n.index("]")]) for n in header if n.startswith("node[") and n.endswith("].x")})
+    listed = read_pvd(pvd)
+    assert [t for t, _ in listed] == list(rows[:, 0])  # 0, 0.1, ..., 0.5
+    for (t, vtp), row in zip(listed, rows):
+        pd = read_vtp(vtp)
+        kind, number, tension = (cell_array(pd, a) for a in ("kind", "number", "tension"))
+        assert pd.GetNumberOfPoints() == len(nodes) == 12
+        assert pd.GetNumberOfLines() == 6 + len(cables) == 30
+        file_tensions = dict(zip(number[kind == 1], tension[kind == 1]))
+        assert [file_tensions[j] for j in cables] == [row[col[f"cable[{j}].tension"]] for j in cables]
+        points = vtk_to_numpy(pd.GetPoints().GetData())
+        csv_points = np.array([[row[col[f"node[{i}].{c}"]] for c in "xyz"] for i in nodes])
+        assert np.array_equal(points, csv_points)
