@@ -13,6 +13,7 @@ pub mod fmi;
 pub mod integrator;
 pub mod model;
 pub mod outputs;
+pub mod partial;
 pub mod render;
 pub mod report;
 pub mod scene;

@@ -100,30 +100,12 @@ pub fn render(scene: Scene, r: Request) -> Result<(), String> {
         }
         Format::Html => {
             let page = tensegrity_fmu::render::html::page(&series(&scene, &r)?);
-            write_file(&r.output, page.as_bytes())?;
+            tensegrity_fmu::partial::write(&r.output, page.as_bytes())?;
         }
         Format::Pvd => tensegrity_fmu::render::vtk::write_pvd(&series(&scene, &r)?, &r.output)?,
     }
     println!("{}", r.output.display());
     Ok(())
-}
-
-/// Writes `bytes` beside `path` under a temporary name and renames it into place.
-fn write_file(path: &Path, bytes: &[u8]) -> Result<(), String> {
-    let name = path
-        .file_name()
-        .ok_or_else(|| format!("-o {}: not a file name", path.display()))?;
-    let mut partial = std::ffi::OsString::from(".");
-    partial.push(name);
-    partial.push(format!(".partial-{}", std::process::id()));
-    let partial = path.with_file_name(partial);
-    let written = std::fs::write(&partial, bytes)
-        .and_then(|()| std::fs::rename(&partial, path))
-        .map_err(|e| format!("cannot write {}: {e}", path.display()));
-    if written.is_err() {
-        let _ = std::fs::remove_file(&partial);
-    }
-    written
 }
 
 /// The run of a still picture and the index of the frame to draw.

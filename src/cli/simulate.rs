@@ -5,9 +5,9 @@
 //! (steps of `solver.step_size`, the last one shortened). With `--inputs`, the
 //! communication points and input values are fmpy's (see [`super::inputs`]).
 
-use std::fs::File;
 use std::io::BufWriter;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
+use tensegrity_fmu::partial::Partial;
 
 use tensegrity_fmu::integrator::Method;
 use tensegrity_fmu::scene::Scene;
@@ -166,47 +166,4 @@ fn check_size(sim: &Simulation, time: f64, interval: f64, columns: usize) -> Res
         }
     }
     Ok(())
-}
-
-/// The CSV while it is written: a temporary file beside the target, renamed onto it at
-/// the end and removed if the run fails.
-struct Partial {
-    tmp: PathBuf,
-    target: PathBuf,
-    done: bool,
-}
-
-impl Partial {
-    fn create(target: &Path) -> Result<(Self, File), String> {
-        let name = target
-            .file_name()
-            .ok_or_else(|| format!("-o {}: not a file name", target.display()))?;
-        let mut tmp_name = std::ffi::OsString::from(".");
-        tmp_name.push(name);
-        tmp_name.push(format!(".partial-{}", std::process::id()));
-        let tmp = target.with_file_name(tmp_name);
-        let file =
-            File::create(&tmp).map_err(|e| format!("cannot create {}: {e}", target.display()))?;
-        let partial = Self {
-            tmp,
-            target: target.to_path_buf(),
-            done: false,
-        };
-        Ok((partial, file))
-    }
-
-    fn commit(mut self) -> Result<(), String> {
-        std::fs::rename(&self.tmp, &self.target)
-            .map_err(|e| format!("cannot write {}: {e}", self.target.display()))?;
-        self.done = true;
-        Ok(())
-    }
-}
-
-impl Drop for Partial {
-    fn drop(&mut self) {
-        if !self.done {
-            let _ = std::fs::remove_file(&self.tmp);
-        }
-    }
 }

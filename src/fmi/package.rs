@@ -13,6 +13,7 @@ use super::documentation::index_html;
 use super::variables::VariableTable;
 use super::{guid_for, BUILD_ID};
 use crate::model::Model;
+use crate::partial::Partial;
 use crate::render::{self, picture, Frames};
 use crate::scene::Scene;
 use crate::sim::Simulation;
@@ -103,29 +104,16 @@ pub fn build_fmu(scene: &Scene, binary: &Path, out: &Path) -> Result<Built, Stri
     })
 }
 
-/// Writes the archive beside `out` under a temporary name and renames it into place, so
-/// a failure never leaves a partial `.fmu` (nor clobbers an existing one).
+/// Writes the archive whole or not at all (see [`Partial`]), so a failure never leaves a
+/// partial `.fmu` nor clobbers an existing one.
 fn write_atomically(out: &Path, entries: &[(String, &[u8])]) -> Result<(), String> {
-    let file_name = out
-        .file_name()
-        .ok_or_else(|| format!("{}: not a file name", out.display()))?;
-    let mut partial_name = std::ffi::OsString::from(".");
-    partial_name.push(file_name);
-    partial_name.push(format!(".partial-{}", std::process::id()));
-    let partial = out.with_file_name(partial_name);
-    let written = write_zip(&partial, entries).and_then(|()| {
-        std::fs::rename(&partial, out).map_err(|e| format!("cannot create {}: {e}", out.display()))
-    });
-    if written.is_err() {
-        let _ = std::fs::remove_file(&partial);
-    }
-    written
+    let (partial, file) = Partial::create(out)?;
+    write_zip(file, out, entries)?;
+    partial.commit()
 }
 
-fn write_zip(path: &Path, entries: &[(String, &[u8])]) -> Result<(), String> {
+fn write_zip(file: std::fs::File, path: &Path, entries: &[(String, &[u8])]) -> Result<(), String> {
     let failed = |e: &dyn std::fmt::Display| format!("writing {}: {e}", path.display());
-    let file = std::fs::File::create(path)
-        .map_err(|e| format!("cannot create {}: {e}", path.display()))?;
     let mut zip = zip::ZipWriter::new(file);
     let options = SimpleFileOptions::default().compression_method(zip::CompressionMethod::Deflated);
     for (name, data) in entries {
