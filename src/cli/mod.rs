@@ -97,35 +97,12 @@ enum Command {
         seconds: f64,
     },
     /// Draw a run: a PNG picture (at --at), a GIF animation (to --time, --fps frames per
-    /// second); the format follows the extension of -o (.png, .gif; .html, .pvd to come).
+    /// second); the format follows the extension of -o (.png, .gif, .html, .pvd).
     Render {
         /// Scene file (.toml or .json) or built-in name; default: prism2.
         scene: Option<String>,
-        /// Picture to write: .png or .gif.
-        #[arg(short, long)]
-        output: PathBuf,
-        /// Time of a still picture, s (default: --time, or 0).
-        #[arg(long, allow_negative_numbers = true)]
-        at: Option<f64>,
-        /// Simulated time, s (default: --at for a picture, 2 for an animation).
-        #[arg(long)]
-        time: Option<f64>,
-        /// Draw a recorded run instead: a CSV of `simulate` or fmpy for this scene (every
-        /// node position column; tensions and velocities read as 0 when absent).
-        #[arg(long, value_name = "RESULT.csv")]
-        csv: Option<PathBuf>,
-        /// Animation frames per second; the run is recorded every 1/fps s.
-        #[arg(long, default_value_t = 10.0)]
-        fps: f64,
-        /// Camera azimuth, degrees about +z from +x.
-        #[arg(long, default_value_t = tensegrity_fmu::render::view::DEFAULT_AZIMUTH, allow_negative_numbers = true)]
-        azimuth: f64,
-        /// Camera elevation, degrees above the x-y plane.
-        #[arg(long, default_value_t = tensegrity_fmu::render::view::DEFAULT_ELEVATION, allow_negative_numbers = true)]
-        elevation: f64,
-        /// Number the nodes, bars (b1, ...) and cables (c1, ...).
-        #[arg(long)]
-        labels: bool,
+        #[command(flatten)]
+        request: render::Request,
     },
     /// Reports on the numerics (`report accuracy`: what accuracy costs in time).
     Report {
@@ -220,29 +197,9 @@ pub fn run(cli: Cli) -> Result<(), String> {
             seconds,
         } => bench::scaling(&stages, seconds),
         Command::Report { what } => report::run(what),
-        Command::Render {
-            scene,
-            output,
-            at,
-            time,
-            csv,
-            fps,
-            azimuth,
-            elevation,
-            labels,
-        } => {
+        Command::Render { scene, request } => {
             let scene = Scene::from_name_or_file(scene.as_deref().unwrap_or(BUILTIN_DEFAULT))
                 .map_err(|e| e.to_string())?;
-            let request = render::Request {
-                output,
-                at,
-                time,
-                csv,
-                fps,
-                azimuth,
-                elevation,
-                labels,
-            };
             render::render(scene, request)
         }
         Command::Golden { dir } => {

@@ -1,29 +1,40 @@
-//! `render`: draw a scene's run as a PNG picture or a GIF animation (the `.html` page and
-//! the `.pvd` ParaView series come with their modules). The run is simulated here with
-//! the scene's own solver settings, or read back from a CSV of `simulate` or fmpy.
+//! `render`: draw a scene's run as a PNG picture, a GIF animation, an interactive HTML page
+//! or a ParaView series. The run is simulated here with the scene's own solver settings,
+//! or read back from a CSV of `simulate` or fmpy.
 
 use std::path::{Path, PathBuf};
 
-use tensegrity_fmu::render::{animation, picture, Frames};
+use clap::Args;
+use tensegrity_fmu::render::{animation, picture, view, Frames};
 use tensegrity_fmu::Scene;
 
 /// What `render` was asked for, beyond the scene.
+#[derive(Args, Debug)]
 pub struct Request {
-    /// The picture to write; its extension picks the format.
+    /// Picture to write; its extension picks the format: .png, .gif, .html or .pvd.
+    #[arg(short, long)]
     pub output: PathBuf,
-    /// Time of a still picture, s.
+    /// Time of a still picture, s (default: --time, or 0).
+    #[arg(long, allow_negative_numbers = true)]
     pub at: Option<f64>,
-    /// Simulated time, s.
+    /// Simulated time, s (default: --at for a picture, 2 for an animation).
+    #[arg(long)]
     pub time: Option<f64>,
-    /// A recorded run instead of simulating.
+    /// Draw a recorded run instead: a CSV of `simulate` or fmpy for this scene (every
+    /// node position column; tensions and velocities read as 0 when absent).
+    #[arg(long, value_name = "RESULT.csv")]
     pub csv: Option<PathBuf>,
-    /// Frames per second of an animation (also its recording interval, 1/fps s).
+    /// Animation frames per second; the run is recorded every 1/fps s.
+    #[arg(long, default_value_t = 10.0)]
     pub fps: f64,
-    /// Camera azimuth, degrees.
+    /// Camera azimuth, degrees about +z from +x.
+    #[arg(long, default_value_t = view::DEFAULT_AZIMUTH, allow_negative_numbers = true)]
     pub azimuth: f64,
-    /// Camera elevation, degrees.
+    /// Camera elevation, degrees above the x-y plane.
+    #[arg(long, default_value_t = view::DEFAULT_ELEVATION, allow_negative_numbers = true)]
     pub elevation: f64,
-    /// Node, bar and cable numbers.
+    /// Number the nodes, bars (b1, ...) and cables (c1, ...).
+    #[arg(long)]
     pub labels: bool,
 }
 

@@ -10,19 +10,14 @@ use super::variables::{BaseType, Binding};
 use super::{Category, Mode, Status};
 use crate::integrator::Method;
 
-fn refused(message: String) -> FmiError {
-    FmiError::refused(message)
-}
-
 impl Instance {
     fn lookup(&self, call: &str, vr: u32, expected: BaseType) -> FmiResult<Binding> {
-        let v = self
-            .core
-            .table
-            .get(vr)
-            .ok_or_else(|| refused(format!("{call}: unknown value reference {vr}")))?;
+        let v =
+            self.core.table.get(vr).ok_or_else(|| {
+                FmiError::refused(format!("{call}: unknown value reference {vr}"))
+            })?;
         if v.base_type != expected {
-            return Err(refused(format!(
+            return Err(FmiError::refused(format!(
                 "{call}: value reference {vr} ({}) is not of this type",
                 v.name
             )));
@@ -68,7 +63,7 @@ impl Instance {
         values: &mut [f64],
     ) -> FmiResult {
         if values.len() != vrs.len() {
-            return Err(refused(format!(
+            return Err(FmiError::refused(format!(
                 "{call}: {} value references but room for {} values",
                 vrs.len(),
                 values.len()
@@ -92,7 +87,7 @@ impl Instance {
         )?;
         match vrs.first() {
             None => Ok(Status::Ok),
-            Some(vr) => Err(refused(format!(
+            Some(vr) => Err(FmiError::refused(format!(
                 "{call}: value reference {vr} is not a variable of this type (this FMU has no String variables)"
             ))),
         }
@@ -101,7 +96,7 @@ impl Instance {
     /// [`Instance::set_each`] from a slice of the same length as `vrs`.
     pub fn set(&mut self, call: &str, base: BaseType, vrs: &[u32], values: &[f64]) -> FmiResult {
         if values.len() != vrs.len() {
-            return Err(refused(format!(
+            return Err(FmiError::refused(format!(
                 "{call}: {} value references but {} values",
                 vrs.len(),
                 values.len()
@@ -139,12 +134,12 @@ impl Instance {
             let variable = &self.core.table.variables[vr as usize];
             let (binding, name) = (variable.binding, variable.name.clone());
             if !value.is_finite() {
-                return Err(refused(format!(
+                return Err(FmiError::refused(format!(
                     "{call}: {name} = {value} is not a finite number"
                 )));
             }
             if matches!(binding, Binding::Output(_)) {
-                return Err(refused(format!(
+                return Err(FmiError::refused(format!(
                     "{call}: {name} is an output and cannot be set"
                 )));
             }
@@ -154,7 +149,7 @@ impl Instance {
             );
             let tunable = variable.variability == Variability::Tunable;
             if !input && !tunable && self.core.mode == Mode::StepComplete {
-                return Err(refused(format!(
+                return Err(FmiError::refused(format!(
                     "{call}: {name} is a fixed parameter and cannot be set after initialization \
                      (set it before fmi2ExitInitializationMode, or use fmi2Reset); the value \
                      was not changed"
@@ -181,14 +176,14 @@ impl Instance {
                 }
                 Binding::NodeForce(k, axis) => next.inputs.node_force[k][axis] = value,
                 Binding::Method if Method::from_fmi_value(value).is_none() => {
-                    return Err(refused(format!(
+                    return Err(FmiError::refused(format!(
                         "{call}: {name} = {value} is not a method (1 = rk4, 2 = dopri5, 3 = rattle)"
                     )));
                 }
                 _ => {
                     apply_parameter(&mut next.scene, binding, value);
                     next.scene.validate().map_err(|e| {
-                        refused(format!(
+                        FmiError::refused(format!(
                             "{call}: {name} = {value} rejected, the value was not changed: {e}"
                         ))
                     })?;
@@ -199,10 +194,9 @@ impl Instance {
         if next.rebuild && self.core.mode == Mode::StepComplete {
             // A tunable parameter acts from here on: rebuild now, keeping the state, so a
             // value the model refuses is refused by this call.
-            self.core.sim = self
-                .core
-                .rebuilt(&next.scene)
-                .map_err(|e| refused(format!("{call}: rejected, nothing was changed: {e}")))?;
+            self.core.sim = self.core.rebuilt(&next.scene).map_err(|e| {
+                FmiError::refused(format!("{call}: rejected, nothing was changed: {e}"))
+            })?;
             next.rebuild = false;
         }
         self.core.commit_set(next);

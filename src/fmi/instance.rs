@@ -50,10 +50,6 @@ impl FmiError {
 /// Result of an instance method: the status to return on success.
 pub type FmiResult<T = Status> = Result<T, FmiError>;
 
-fn error(message: impl Into<String>) -> FmiError {
-    FmiError::refused(message)
-}
-
 /// Everything that `Reset` restores.
 #[derive(Clone)]
 pub(super) struct Core {
@@ -190,7 +186,7 @@ impl Instance {
         let mut logging = self.logging;
         for c in categories {
             let category = Category::from_name(c).ok_or_else(|| {
-                error(format!(
+                FmiError::refused(format!(
                     "fmi2SetDebugLogging: unknown log category '{c}'; nothing was changed. Use one of {}",
                     Category::ALL.map(Category::name).join(", ")
                 ))
@@ -205,7 +201,7 @@ impl Instance {
         if allowed.contains(&self.core.mode) {
             Ok(())
         } else {
-            Err(error(format!(
+            Err(FmiError::refused(format!(
                 "{call}: illegal call sequence: not allowed in mode {:?}",
                 self.core.mode
             )))
@@ -216,7 +212,7 @@ impl Instance {
     pub fn setup_experiment(&mut self, start: f64, stop: Option<f64>) -> FmiResult {
         self.require("fmi2SetupExperiment", &[Mode::Instantiated])?;
         if !start.is_finite() || stop.is_some_and(|s| !(s.is_finite() && s >= start)) {
-            return Err(error(format!(
+            return Err(FmiError::refused(format!(
                 "fmi2SetupExperiment: start time {start} and stop time {stop:?} must be finite with stop ≥ start"
             )));
         }
@@ -263,12 +259,12 @@ impl Instance {
     /// the step cannot advance time; the instance stays in initialization mode to be fixed.
     fn check_start(&mut self, call: &str) -> FmiResult<()> {
         if let Some(why) = self.core.sim.step_size_problem() {
-            return Err(error(format!("{call}: {why}")));
+            return Err(FmiError::refused(format!("{call}: {why}")));
         }
         let step = self.core.scene.solver.step_size;
         let resolution = self.core.time.abs() * f64::EPSILON;
         if resolution > 1e-6 * step {
-            return Err(error(format!(
+            return Err(FmiError::refused(format!(
                 "{call}: the start time {} s is so large that its resolution ({resolution:e} s) \
                  is too coarse for solver.step_size = {step} s, so time would not advance \
                  accurately. Call fmi2Reset, then fmi2SetupExperiment with a start nearer 0, or \
@@ -324,19 +320,19 @@ impl Instance {
         self.require("fmi2DoStep", &[Mode::StepComplete])?;
         let now = self.core.time;
         if !(h > 0.0 && h.is_finite()) {
-            return Err(error(format!(
+            return Err(FmiError::refused(format!(
                 "fmi2DoStep: communicationStepSize must be > 0, got {h}"
             )));
         }
         if !t.is_finite() || (t - now).abs() > time_tolerance(now) {
-            return Err(error(format!(
+            return Err(FmiError::refused(format!(
                 "fmi2DoStep: currentCommunicationPoint {t} does not continue from the last step, which ended at {now}"
             )));
         }
         let end = t + h;
         if let Some(stop) = self.core.stop_time {
             if end > stop + time_tolerance(stop) {
-                return Err(error(format!(
+                return Err(FmiError::refused(format!(
                     "fmi2DoStep: step to {end} goes past the stop time {stop}"
                 )));
             }
@@ -406,14 +402,14 @@ impl Instance {
         )?;
         snapshot
             .restore(&self.guid, &mut self.core)
-            .map_err(|e| error(format!("fmi2SetFMUstate: {e}")))?;
+            .map_err(|e| FmiError::refused(format!("fmi2SetFMUstate: {e}")))?;
         Ok(Status::Ok)
     }
 
     /// `fmi2DeSerializeFMUstate`.
     pub fn deserialize_state(&self, bytes: &[u8]) -> FmiResult<Snapshot> {
         Snapshot::from_bytes(&self.guid, bytes)
-            .map_err(|e| error(format!("fmi2DeSerializeFMUstate: {e}")))
+            .map_err(|e| FmiError::refused(format!("fmi2DeSerializeFMUstate: {e}")))
     }
 }
 
