@@ -1,32 +1,16 @@
 //! Writing CSV rows allocates nothing once the row buffer has grown: a counting global
 //! allocator watches `RowWriter::write_row` on tower20 (574 columns).
 
-use std::alloc::{GlobalAlloc, Layout, System};
-use std::sync::atomic::{AtomicUsize, Ordering};
+mod alloc_support;
+use alloc_support::{allocations, watch_this_thread};
 
 use tensegrity_fmu::outputs::{self, RowWriter};
 use tensegrity_fmu::scene::builtin;
 use tensegrity_fmu::{Model, Simulation};
 
-struct Counting;
-
-static ALLOCATIONS: AtomicUsize = AtomicUsize::new(0);
-
-unsafe impl GlobalAlloc for Counting {
-    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        ALLOCATIONS.fetch_add(1, Ordering::SeqCst);
-        System.alloc(layout)
-    }
-    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
-        System.dealloc(ptr, layout)
-    }
-}
-
-#[global_allocator]
-static GLOBAL: Counting = Counting;
-
 #[test]
 fn rows_allocate_nothing_after_the_first() {
+    watch_this_thread();
     let mut sim = Simulation::new(Model::new(&builtin("tower20").unwrap()).unwrap());
     sim.inputs.node_force[0].x = 1.0;
     let table = outputs::outputs(&sim);
@@ -39,9 +23,9 @@ fn rows_allocate_nothing_after_the_first() {
     for k in 1..=20 {
         sim.advance_to(k as f64 * 1e-3).unwrap();
         sim.refresh();
-        let before = ALLOCATIONS.load(Ordering::SeqCst);
+        let before = allocations();
         rows.write_row(&mut sink, &table, &sim).unwrap();
-        during += ALLOCATIONS.load(Ordering::SeqCst) - before;
+        during += allocations() - before;
     }
     assert_eq!(during, 0, "{during} allocations in 20 rows");
     // And the rows are what was asked for: 574 values, the time first.
