@@ -3,9 +3,11 @@
 //!
 //! Layers: [`scene`] (files) → [`model`] (constants, built once) → [`dynamics`]
 //! (the equations of motion) → [`integrator`] + [`correction`] → [`sim`] (a running
-//! simulation) → [`outputs`] (named quantities shared by CSV and FMU).
+//! simulation) → [`outputs`] (named quantities shared by CSV and FMU). [`analysis`]
+//! (equilibrium, modes, linear models) works on the model and the dynamics' tangent.
 #![warn(missing_docs)]
 
+pub mod analysis;
 pub mod correction;
 pub mod dynamics;
 pub mod error;

@@ -1,5 +1,6 @@
 //! Command-line front end. Each subcommand is a thin layer over the library.
 
+mod analyze;
 mod bench;
 mod bench_csv;
 mod bench_effects;
@@ -104,6 +105,27 @@ enum Command {
         #[command(flatten)]
         request: render::Request,
     },
+    /// Natural frequencies (Hz) and mode shapes about the scene's start state, which must be
+    /// an equilibrium at rest (scene key `start = "equilibrium"` solves for one).
+    Modes {
+        /// Scene file (.toml or .json) or built-in name; default: prism2.
+        scene: Option<String>,
+        /// Print `{"frequencies_hz": [...], "kinds": [...], ...}` instead of a table.
+        #[arg(long)]
+        json: bool,
+        /// Write the mode shapes (every node's displacement per mode) to this CSV.
+        #[arg(short, long, value_name = "SHAPES.csv")]
+        output: Option<PathBuf>,
+    },
+    /// The state-space model `ẋ = A x + B u, y = C x + D u` about the scene's start state
+    /// (an equilibrium at rest), with the FMU's inputs and outputs; .json, .npz or .mat.
+    Linearize {
+        /// Scene file (.toml or .json) or built-in name; default: prism2.
+        scene: Option<String>,
+        /// Output file; its extension picks the format: .json, .npz or .mat.
+        #[arg(short, long)]
+        output: PathBuf,
+    },
     /// Reports on the numerics (`report accuracy`: what accuracy costs in time).
     Report {
         #[command(subcommand)]
@@ -197,6 +219,12 @@ pub fn run(cli: Cli) -> Result<(), String> {
             seconds,
         } => bench::scaling(&stages, seconds),
         Command::Report { what } => report::run(what),
+        Command::Modes {
+            scene,
+            json,
+            output,
+        } => analyze::modes(&load_scene(scene)?, json, output.as_deref()),
+        Command::Linearize { scene, output } => analyze::linearize(&load_scene(scene)?, &output),
         Command::Render { scene, request } => {
             let scene = Scene::from_name_or_file(scene.as_deref().unwrap_or(BUILTIN_DEFAULT))
                 .map_err(|e| e.to_string())?;
@@ -220,6 +248,10 @@ pub fn run(cli: Cli) -> Result<(), String> {
     }
 }
 
+fn load_scene(scene: Option<String>) -> Result<Scene, String> {
+    Scene::from_name_or_file(scene.as_deref().unwrap_or(BUILTIN_DEFAULT)).map_err(|e| e.to_string())
+}
+
 fn build(scene_arg: &str, output: Option<PathBuf>, binary: Option<PathBuf>) -> Result<(), String> {
     let scene = Scene::from_name_or_file(scene_arg).map_err(|e| e.to_string())?;
     let binary = match binary {
@@ -238,6 +270,9 @@ fn build(scene_arg: &str, output: Option<PathBuf>, binary: Option<PathBuf>) -> R
     }
     let out = output.unwrap_or_else(|| PathBuf::from(format!("{}.fmu", scene.name)));
     let built = fmi::package::build_fmu(&scene, &binary, &out)?;
+    if let Some(start) = built.start {
+        eprintln!("{start}");
+    }
     eprintln!(
         "built {} ({} variables, model identifier {}, GUID {})",
         scene.name, built.variables, built.model_identifier, built.guid

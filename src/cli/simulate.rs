@@ -11,7 +11,7 @@ use tensegrity_fmu::partial::Partial;
 
 use tensegrity_fmu::integrator::Method;
 use tensegrity_fmu::scene::Scene;
-use tensegrity_fmu::{outputs, Model, Simulation};
+use tensegrity_fmu::{outputs, Simulation};
 
 use super::inputs::{isclose, InputTable};
 
@@ -42,7 +42,7 @@ pub fn simulate(scene: Scene, request: Request) -> Result<(), String> {
         inputs,
         output,
     } = request;
-    let model = Model::new(&scene).map_err(|e| e.to_string())?;
+    let model = tensegrity_fmu::analysis::load(&scene).map_err(|e| e.to_string())?;
     let h = model.solver.step_size;
     if !(h > 0.0 && h.is_finite()) {
         return Err(format!(
@@ -72,6 +72,9 @@ pub fn simulate(scene: Scene, request: Request) -> Result<(), String> {
     };
     for w in sim.warnings() {
         eprintln!("warning: {w}");
+    }
+    if let Some(start) = sim.model().start {
+        eprintln!("{start}");
     }
     if let Some(w) = sim.stability_problem() {
         eprintln!("warning: {w}");

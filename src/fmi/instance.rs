@@ -10,7 +10,6 @@ use super::snapshot::Snapshot;
 use super::variables::{Binding, VariableTable};
 use super::{guid_for, Category, Message, Mode, Status};
 use crate::dynamics::Inputs;
-use crate::model::Model;
 use crate::scene::Scene;
 use crate::sim::Simulation;
 
@@ -105,7 +104,8 @@ impl Instance {
             ));
         }
         let scene = Scene::from_toml_str(&text).map_err(|e| format!("fmi2Instantiate: {e}"))?;
-        let model = Model::new(&scene).map_err(|e| format!("fmi2Instantiate: scene: {e}"))?;
+        let model =
+            crate::analysis::load(&scene).map_err(|e| format!("fmi2Instantiate: scene: {e}"))?;
         let sim = Simulation::new(model);
         let core = Core {
             scene: sim.model().explicit_scene(),
@@ -438,7 +438,7 @@ impl Core {
     /// A simulation of `scene`'s parameters with this one's inputs, time and, once
     /// initialized, its state: what a parameter change rebuilds.
     pub(super) fn rebuilt(&self, scene: &Scene) -> Result<Simulation, String> {
-        let mut sim = Simulation::new(Model::new(scene).map_err(|e| e.to_string())?);
+        let mut sim = Simulation::new(crate::analysis::load(scene).map_err(|e| e.to_string())?);
         sim.inputs = self.sim.inputs.clone();
         if matches!(
             self.mode,

@@ -12,7 +12,6 @@ use super::description::{
 use super::documentation::index_html;
 use super::variables::VariableTable;
 use super::{guid_for, BUILD_ID};
-use crate::model::Model;
 use crate::partial::Partial;
 use crate::render::{self, picture, Frames};
 use crate::scene::Scene;
@@ -30,6 +29,8 @@ pub struct Built {
     pub model_identifier: String,
     /// Number of variables.
     pub variables: usize,
+    /// The equilibrium solve, when the scene starts at its equilibrium.
+    pub start: Option<crate::model::StartReport>,
 }
 
 /// The GUID placeholder of the golden modelDescription files (the real GUID hashes the
@@ -49,7 +50,7 @@ pub fn golden_provenance() -> Provenance {
 /// modelDescription.xml of `scene` as packaged, but with [`golden_provenance`]: the golden
 /// files under `modelDescription/` hold this text for each shipped scene.
 pub fn golden_model_description(scene: &Scene) -> Result<String, String> {
-    let model = Model::new(scene).map_err(|e| e.to_string())?;
+    let model = crate::analysis::load(scene).map_err(|e| e.to_string())?;
     let sim = Simulation::new(model);
     let table = VariableTable::new(&sim);
     model_description(sim.model(), &table, &golden_provenance())
@@ -60,7 +61,7 @@ pub fn golden_model_description(scene: &Scene) -> Result<String, String> {
 /// Builds the FMU for `scene` at `out`, with the shared library at `binary`.
 pub fn build_fmu(scene: &Scene, binary: &Path, out: &Path) -> Result<Built, String> {
     let scene_text = scene.to_toml_string();
-    let model = Model::new(scene).map_err(|e| e.to_string())?;
+    let model = crate::analysis::load(scene).map_err(|e| e.to_string())?;
     let mut sim = Simulation::new(model);
     if let Some(why) = sim.step_size_problem() {
         return Err(why);
@@ -101,6 +102,7 @@ pub fn build_fmu(scene: &Scene, binary: &Path, out: &Path) -> Result<Built, Stri
         guid,
         model_identifier: id,
         variables: table.variables.len(),
+        start: sim.model().start,
     })
 }
 

@@ -10,7 +10,6 @@ use super::instance::Core;
 use super::parameters::apply_parameter;
 use super::variables::Binding;
 use super::Mode;
-use crate::model::Model;
 use crate::sim::{Simulation, State};
 use fmi2_model_description::Causality;
 
@@ -77,7 +76,7 @@ impl Snapshot {
         let mut sim = if scene == core.scene {
             core.sim.clone()
         } else {
-            Simulation::new(Model::new(&scene).map_err(|e| e.to_string())?)
+            Simulation::new(crate::analysis::load(&scene).map_err(|e| e.to_string())?)
         };
         let sizes_match = self.state.y.len() == sim.state().y.len()
             && self.force_density.len() == sim.inputs.force_density.len()

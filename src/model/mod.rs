@@ -115,6 +115,29 @@ pub struct Model {
     pub reactions: Reactions,
     /// Things the user should know (skipped bars, projected velocities, …).
     pub warnings: Vec<String>,
+    /// How the start positions were found, when the scene asks for its equilibrium.
+    pub start: Option<StartReport>,
+}
+
+/// What the static-equilibrium solve did (see `analysis::equilibrium`).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct StartReport {
+    /// Newton iterations taken.
+    pub iterations: usize,
+    /// Final unbalanced generalized force `‖M̄ η̈₂‖`, N.
+    pub residual: f64,
+}
+
+impl std::fmt::Display for StartReport {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "start: static equilibrium in {} Newton iteration{} (unbalanced force {:.1e} N)",
+            self.iterations,
+            if self.iterations == 1 { "" } else { "s" },
+            self.residual
+        )
+    }
 }
 
 impl Model {
@@ -222,6 +245,7 @@ impl Model {
             correction,
             reactions,
             warnings,
+            start: None,
         };
         model.pipeline = Pipeline::new(&model);
         Ok(model)

@@ -89,7 +89,7 @@ impl Frames {
     /// Simulates `scene` with its own solver settings and inputs at their start values,
     /// recording at `times` (increasing, from 0).
     pub fn from_run(scene: &Scene, times: &[f64]) -> Result<Self, String> {
-        let model = Model::new(scene).map_err(|e| e.to_string())?;
+        let model = crate::analysis::load(scene).map_err(|e| e.to_string())?;
         let mut sim = Simulation::new(model);
         if let Some(why) = sim.step_size_problem() {
             return Err(why);
@@ -140,7 +140,7 @@ impl Frames {
     /// [`super::csv`]. Node positions are required; velocities, tensions and bar forces
     /// without a column read as zeros.
     pub fn from_csv(scene: &Scene, path: &Path) -> Result<Self, String> {
-        let model = Model::new(scene).map_err(|e| e.to_string())?;
+        let model = crate::analysis::load(scene).map_err(|e| e.to_string())?;
         super::csv::read(Self::topology(&model), model.n_nodes(), path)
     }
 

@@ -211,7 +211,7 @@ pub fn accuracy(scene: &Scene, options: &Options, out_dir: &Path) -> Result<Repo
     {
         return Err("step sizes and tolerances must be positive and finite".into());
     }
-    let model = Model::new(scene).map_err(|e| e.to_string())?;
+    let model = crate::analysis::load(scene).map_err(|e| e.to_string())?;
     let grid = Grid {
         interval: o.interval,
         n: (o.horizon / o.interval + 1e-9).floor() as usize,

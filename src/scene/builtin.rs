@@ -2,7 +2,7 @@
 //! and embedded here; `generate` rebuilds each from its formula, and a test holds the
 //! shipped files to it.
 
-use super::{BarSpec, CableControl, CableSpec, PrestressSpec, Scene, SolverSpec};
+use super::{BarSpec, CableControl, CableSpec, PrestressSpec, Scene, SolverSpec, Start};
 
 /// The default scene, built when no scene is named.
 pub const BUILTIN_DEFAULT: &str = "prism2";
@@ -110,6 +110,7 @@ pub fn tower_scene(stages: usize, stiffness: Option<f64>, name: &str) -> Scene {
         prestress: Some(PrestressSpec {
             min_tension: PRESTRESS_TENSION,
         }),
+        start: Start::AsGiven,
         solver: SolverSpec::default(),
     }
 }
@@ -186,6 +187,7 @@ fn icosahedron() -> Scene {
         prestress: Some(PrestressSpec {
             min_tension: PRESTRESS_TENSION,
         }),
+        start: Start::AsGiven,
         solver: SolverSpec::default(),
     }
 }

@@ -58,9 +58,30 @@ pub struct Scene {
     /// Equilibrium prestress: derive rest lengths / start force densities from a self-stress.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub prestress: Option<PrestressSpec>,
+    /// Where the simulation starts: the given geometry, or the static equilibrium.
+    #[serde(default, skip_serializing_if = "Start::is_as_given")]
+    pub start: Start,
     /// Solver settings.
     #[serde(default)]
     pub solver: SolverSpec,
+}
+
+/// The start state a scene asks for.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Start {
+    /// The node positions as written (default).
+    #[default]
+    AsGiven,
+    /// The static equilibrium under everything the scene declares, solved when the scene
+    /// is loaded (Newton's method in the constrained coordinates).
+    Equilibrium,
+}
+
+impl Start {
+    fn is_as_given(&self) -> bool {
+        *self == Self::AsGiven
+    }
 }
 
 /// A bar between two nodes.

@@ -132,6 +132,7 @@ pub fn random_scene(seed: u64) -> Scene {
         ground: None,
         outputs: None,
         prestress: None,
+        start: Default::default(),
         solver: SolverSpec::default(),
     }
 }

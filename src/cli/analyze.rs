@@ -1,0 +1,127 @@
+//! `modes` and `linearize`: the analyses of [`tensegrity_fmu::analysis`] about a scene's
+//! start state, named with the FMU's variable names.
+
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+
+use serde_json::json;
+use tensegrity_fmu::analysis::modes::{ModeKind, Spectrum};
+use tensegrity_fmu::analysis::{self, export, linear, InputChannel};
+use tensegrity_fmu::fmi::variables::{Binding, VariableTable};
+use tensegrity_fmu::{outputs, partial, Scene, Simulation};
+
+/// The scene's start state as a simulation, refused unless it is an equilibrium at rest.
+fn at_rest(scene: &Scene, what: &str) -> Result<Simulation, String> {
+    let model = analysis::load(scene).map_err(|e| e.to_string())?;
+    if let Some(start) = model.start {
+        eprintln!("{start}");
+    }
+    let mut sim = Simulation::new(model);
+    analysis::require_rest(&sim, what)?;
+    sim.refresh();
+    Ok(sim)
+}
+
+/// `tensegrity-fmu modes`: frequencies on standard output (a table, or JSON), shapes to CSV.
+pub fn modes(scene: &Scene, json: bool, shapes: Option<&Path>) -> Result<(), String> {
+    let sim = at_rest(scene, "modes")?;
+    let y = &sim.state().y;
+    let spectrum = Spectrum::new(sim.model(), &sim.inputs, sim.time(), &y[..y.len() / 2]);
+    if let Some(path) = shapes {
+        partial::write(path, shapes_csv(&sim, &spectrum).as_bytes())?;
+        eprintln!("mode shapes: {}", path.display());
+    }
+    if json {
+        let modes = &spectrum.modes;
+        let value = json!({
+            "scene": scene.name,
+            "frequencies_hz": spectrum.frequencies_hz(),
+            "kinds": modes.iter().map(|m| m.kind.name()).collect::<Vec<_>>(),
+            "omega_squared": modes.iter().map(|m| m.omega_squared).collect::<Vec<_>>(),
+            "growth_rates_per_s": modes.iter().map(|m| m.growth_rate()).collect::<Vec<_>>(),
+            "rigid_body_modes": spectrum.count(ModeKind::RigidBody),
+        });
+        println!(
+            "{}",
+            serde_json::to_string_pretty(&value).expect("plain values")
+        );
+        return Ok(());
+    }
+    print!("{}", table(scene, &spectrum));
+    Ok(())
+}
+
+fn table(scene: &Scene, spectrum: &Spectrum) -> String {
+    let mut out = format!(
+        "{}: {} modes about the start state (constrained coordinates, with the geometric \
+         stiffness of the prestress)\n{:>5}  {:>14}  kind\n",
+        scene.name,
+        spectrum.modes.len(),
+        "mode",
+        "frequency (Hz)"
+    );
+    for (k, mode) in spectrum.modes.iter().enumerate() {
+        let note = match mode.kind {
+            ModeKind::Unstable => format!("unstable (grows at {:.4e} 1/s)", mode.growth_rate()),
+            kind => kind.name().to_string(),
+        };
+        let _ = writeln!(out, "{:>5}  {:>14.6}  {note}", k + 1, mode.frequency_hz());
+    }
+    out
+}
+
+/// One row per mode: number, frequency, kind, then every node's displacement (the shape,
+/// scaled so the largest node moves 1 m).
+fn shapes_csv(sim: &Simulation, spectrum: &Spectrum) -> String {
+    let mut out = String::from("mode,frequency_hz,kind");
+    for n in 1..=sim.model().n_nodes() {
+        for axis in ["x", "y", "z"] {
+            let _ = write!(out, ",node[{n}].d{axis}");
+        }
+    }
+    out.push('\n');
+    for (k, mode) in spectrum.modes.iter().enumerate() {
+        let _ = write!(
+            out,
+            "{},{},{}",
+            k + 1,
+            mode.frequency_hz(),
+            mode.kind.name()
+        );
+        for d in &mode.shape {
+            let _ = write!(out, ",{},{},{}", d.x, d.y, d.z);
+        }
+        out.push('\n');
+    }
+    out
+}
+
+/// `tensegrity-fmu linearize`: the state-space model about the start state, to `output`.
+pub fn linearize(scene: &Scene, output: &PathBuf) -> Result<(), String> {
+    let sim = at_rest(scene, "linearize")?;
+    let table = VariableTable::new(&sim);
+    let channels: Vec<(String, InputChannel)> = table
+        .variables
+        .iter()
+        .filter_map(|v| {
+            let channel = match v.binding {
+                Binding::ForceDensity(k) => InputChannel::ForceDensity(k),
+                Binding::ReelInput(k) => InputChannel::RestLength(k),
+                Binding::NodeForce(k, axis) => InputChannel::NodeForce(k, axis),
+                _ => return None,
+            };
+            Some((v.name.clone(), channel))
+        })
+        .collect();
+    let outputs = outputs::outputs(&sim);
+    let model = linear::linearize(&sim, &channels, &outputs);
+    export::write(output, &model, &scene.name)?;
+    eprintln!(
+        "linear model: {} states, {} inputs, {} outputs",
+        model.states.len(),
+        model.inputs.len(),
+        model.outputs.len()
+    );
+    println!("{}", output.display());
+    Ok(())
+}
