@@ -16,6 +16,8 @@ use crate::model::{Model, StartReport};
 pub const MAX_ITERATIONS: usize = 100;
 /// Converged when `‖M̄ η̈₂‖` is below this fraction of the applied forces' size.
 pub const TOLERANCE: f64 = 1e-11;
+/// A stalled line search still counts as converged below this fraction (round-off).
+const ROUND_OFF: f64 = 1e-9;
 
 /// A solved equilibrium.
 #[derive(Debug, Clone)]
@@ -56,7 +58,7 @@ pub fn solve(model: &Model, inputs: &Inputs) -> Result<Settled, SceneError> {
     let scale = force_scale(&ws);
     let tolerance = TOLERANCE * scale;
     let mut iterations = 0;
-    while residual > tolerance {
+    'newton: while residual > tolerance {
         if iterations == MAX_ITERATIONS {
             return Err(failure(format!(
                 "Newton's method did not converge in {MAX_ITERATIONS} iterations (force \
@@ -86,6 +88,10 @@ pub fn solve(model: &Model, inputs: &Inputs) -> Result<Settled, SceneError> {
                 break;
             }
             alpha *= 0.5;
+            if alpha < 1e-10 && residual <= ROUND_OFF * scale {
+                // No step improves on round-off: converged as far as doubles allow.
+                break 'newton;
+            }
             if alpha < 1e-10 {
                 return Err(failure(format!(
                     "Newton's method stalled after {iterations} iterations (force residual \
@@ -210,12 +216,8 @@ fn residual(model: &Model, inputs: &Inputs, q: &[f64], ws: &mut Workspace) -> f6
     force.iter().map(|f| f * f).sum::<f64>().sqrt()
 }
 
-/// The size of the applied forces (cable pulls, weights, loads), N; 1 N if there are none.
+/// The size of the applied forces (cable pulls, weights, loads), N, at least 1 N: a
+/// structure without forces is judged against 1 N, not against its round-off.
 fn force_scale(ws: &Workspace) -> f64 {
-    let total: f64 = ws.end_force.iter().map(|f| f.norm()).sum();
-    if total > 0.0 {
-        total
-    } else {
-        1.0
-    }
+    ws.end_force.iter().map(|f| f.norm()).sum::<f64>().max(1.0)
 }
