@@ -167,3 +167,30 @@ fn an_equilibrium_given_as_is_needs_no_iteration() {
         assert!((x - given[n]).norm() < 1e-15, "node {} moved", n + 1);
     }
 }
+
+#[test]
+fn a_structure_too_large_for_the_dense_solve_is_refused_up_front() {
+    // 167 stages: 3 · 3 · 167 = 1503 reduced coordinates, just over the limit.
+    // Rest lengths written out: the prestress solve of so tall a tower takes longer
+    // than the check under test.
+    let mut scene = settled(tower_scene(167, Some(500.0), "tower167"));
+    scene.prestress = None;
+    for cable in &mut scene.cables {
+        let [a, b] = cable.nodes;
+        let s = Vector3::from(scene.nodes[b - 1]) - Vector3::from(scene.nodes[a - 1]);
+        cable.rest_length = Some(0.99 * s.norm());
+    }
+    let started = std::time::Instant::now();
+    let err = analysis::load(&scene).unwrap_err().to_string();
+    println!("{err} ({:.2} s)", started.elapsed().as_secs_f64());
+    assert!(
+        err.starts_with(
+            "start: start = \"equilibrium\": the structure has 1503 reduced coordinates"
+        ),
+        "{err}"
+    );
+    assert!(err.contains("start it \"as_given\""), "{err}");
+    let mut given = scene;
+    given.start = Start::AsGiven;
+    assert!(analysis::load(&given).is_ok());
+}
