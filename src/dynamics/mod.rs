@@ -6,17 +6,15 @@
 //! `b·b̈ = −|ḃ|²`, λ is closed-form per bar. Ω enters λ through the end forces and comes
 //! from `N̈ P = 0`; it is a stage only when the scene has pins or joints.
 
-mod block_cholesky;
 pub mod effects;
 pub mod energy;
-pub mod reactions;
 pub mod supports;
 
 use nalgebra::Vector3;
 
+use crate::model::reactions::Reactions;
 use crate::model::{CableLaw, Model};
 pub use effects::applied_forces;
-use reactions::Reactions;
 
 /// Values an importer sets between steps.
 #[derive(Debug, Clone, PartialEq)]

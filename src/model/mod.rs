@@ -1,23 +1,28 @@
 //! The immutable model built once from a validated scene: topology, masses, laws,
 //! the constraint basis, the correction plan and the reaction-system layout.
 
+mod block_cholesky;
 pub mod contact;
 pub mod coords;
+pub mod correction_plan;
+pub mod effects;
 pub mod inertia;
 pub mod prestress;
+pub mod reactions;
+pub mod supports;
 
 use nalgebra::Vector3;
 
-use crate::correction::CorrectionPlan;
-use crate::dynamics::effects::Pipeline;
-use crate::dynamics::reactions::Reactions;
-use crate::dynamics::supports::Support;
 use crate::error::SceneError;
 use crate::scene::{CableControl, LoadSpec, Scene, SolverSpec};
 use contact::Ground;
 pub use coords::BasisKind;
 use coords::Coordinates;
+use correction_plan::CorrectionPlan;
+use effects::Pipeline;
 use inertia::BarInertia;
+use reactions::Reactions;
+use supports::Support;
 
 /// A rigid bar between physical nodes (0-based).
 #[derive(Debug, Clone, PartialEq)]

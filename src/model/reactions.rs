@@ -9,8 +9,8 @@
 use nalgebra::{DMatrix, DVector, Matrix3, Vector3};
 
 use super::block_cholesky::BlockCholesky;
-use crate::model::coords::Coordinates;
-use crate::model::inertia::BarInertia;
+use super::coords::Coordinates;
+use super::inertia::BarInertia;
 
 /// A constraint column touching a bar: (column, coefficient, end side 0/1).
 type Term = (usize, f64, usize);
