@@ -1,11 +1,12 @@
 //! `render`: draw a scene's run as a PNG picture, a GIF animation, an interactive HTML page
 //! or a ParaView series. The run is simulated here with the scene's own solver settings,
-//! or read back from a CSV of `simulate` or fmpy.
+//! or read back from a CSV of `simulate` or fmpy, or is one mode shape moving about the
+//! start equilibrium (`--mode`, built in [`tensegrity_fmu::render::mode`]).
 
 use std::path::{Path, PathBuf};
 
 use clap::Args;
-use tensegrity_fmu::render::{animation, picture, view, Frames};
+use tensegrity_fmu::render::{animation, mode, picture, view, Frames};
 use tensegrity_fmu::Scene;
 
 /// What `render` was asked for, beyond the scene.
@@ -36,6 +37,15 @@ pub struct Request {
     /// Number the nodes, bars (b1, ...) and cables (c1, ...).
     #[arg(long)]
     pub labels: bool,
+    /// Instead of simulating, animate mode K (1-based, as `modes` numbers them) about the
+    /// start equilibrium: x* + A·φ·sin(2π f t) over one period (a zero-frequency mode
+    /// moves linearly there and back over 2 s), bar lengths restored; a .png shows the
+    /// peak. Cables are coloured by the tensions of each displaced geometry (at rest).
+    #[arg(long, value_name = "K", allow_negative_numbers = true)]
+    pub mode: Option<i64>,
+    /// Largest node displacement of --mode, m (default: 10 % of the structure's size).
+    #[arg(long, value_name = "A", allow_negative_numbers = true)]
+    pub amplitude: Option<f64>,
 }
 
 /// Default simulated time of an animation, s.
@@ -96,27 +106,50 @@ pub fn render(scene: Scene, r: Request) -> Result<(), String> {
             r.fps
         ));
     }
+    if r.amplitude.is_some() && r.mode.is_none() {
+        return Err("--amplitude is the size of a --mode animation; add --mode K (`tensegrity-fmu modes SCENE` lists them) or drop --amplitude".into());
+    }
     if r.csv.is_some() && r.time.is_some() {
         return Err("--time and --csv exclude each other: the CSV's rows are the run; drop --time (or --csv to simulate)".into());
     }
     let style = picture::Style::new(azimuth, elevation, r.labels);
+    let (frames, k) = match (r.mode, &format) {
+        (Some(number), _) => mode_loop(&scene, &r, number)?,
+        (None, Format::Png) => still(&scene, &r)?,
+        (None, _) => (series(&scene, &r)?, 0),
+    };
     match format {
-        Format::Png => {
-            let (frames, k) = still(&scene, &r)?;
-            picture::write_png(&frames, k, &style, &r.output)?;
-        }
-        Format::Gif => {
-            let frames = series(&scene, &r)?;
-            animation::write_gif(&frames, r.fps, &style, &r.output)?;
-        }
+        Format::Png => picture::write_png(&frames, k, &style, &r.output)?,
+        Format::Gif => animation::write_gif(&frames, r.fps, &style, &r.output)?,
         Format::Html => {
-            let page = tensegrity_fmu::render::html::page(&series(&scene, &r)?);
+            let page = tensegrity_fmu::render::html::page(&frames);
             tensegrity_fmu::partial::write(&r.output, page.as_bytes())?;
         }
-        Format::Pvd => tensegrity_fmu::render::vtk::write_pvd(&series(&scene, &r)?, &r.output)?,
+        Format::Pvd => tensegrity_fmu::render::vtk::write_pvd(&frames, &r.output)?,
     }
     println!("{}", r.output.display());
     Ok(())
+}
+
+/// One loop of mode `number` and the index of its peak (the frame of a still picture).
+fn mode_loop(scene: &Scene, r: &Request, number: i64) -> Result<(Frames, usize), String> {
+    let excluded = [
+        (r.csv.is_some(), "--csv", "a mode moves about the scene's start equilibrium, not a recorded run; drop --csv (or --mode to draw the CSV)"),
+        (r.time.is_some(), "--time", "a mode animation lasts one period (2 s without a frequency); drop --time"),
+        (r.at.is_some(), "--at", "a mode's still picture shows its peak, a quarter period in; drop --at"),
+    ];
+    if let Some((_, flag, why)) = excluded.iter().find(|e| e.0) {
+        return Err(format!("--mode and {flag} exclude each other: {why}"));
+    }
+    let animation = mode::animate(scene, number, r.amplitude, r.fps)?;
+    eprintln!(
+        "{}: {} frames over {:.4} s, amplitude {:.4} m",
+        animation.title,
+        animation.frames.len(),
+        animation.period,
+        animation.amplitude
+    );
+    Ok((animation.frames, animation.peak))
 }
 
 /// The run of a still picture and the index of the frame to draw.

@@ -113,16 +113,17 @@ impl Frames {
                     .map_err(|e| format!("the run stopped at t = {} s: {e}", sim.time()))?;
             }
             sim.refresh();
-            frames.push_state(sim);
+            frames.push_state(sim, sim.time());
         }
         Ok(frames)
     }
 
-    fn push_state(&mut self, sim: &Simulation) {
+    /// Appends the state `sim` last evaluated (see [`Simulation::refresh`]), stamped `time`.
+    pub(super) fn push_state(&mut self, sim: &Simulation, time: f64) {
         let model = sim.model();
         let vec3 = |v: nalgebra::Vector3<f64>| [v.x, v.y, v.z];
         let nodes = 0..model.n_nodes();
-        self.times.push(sim.time());
+        self.times.push(time);
         self.positions
             .push(nodes.clone().map(|i| vec3(sim.node_position(i))).collect());
         self.velocities

@@ -1,11 +1,13 @@
 //! Seeing a structure: a run recorded as [`Frames`] (from a simulation or a CSV of the FMU's
 //! output names), drawn as PNG/GIF pictures, an interactive HTML page or a ParaView time
-//! series. The drawing modules read only [`Frames`]; nothing here touches the physics.
+//! series, or one mode shape animated about the start equilibrium ([`mode`]). The drawing
+//! modules read only [`Frames`]; only [`Frames`] and [`mode`] touch the physics.
 
 pub mod animation;
 mod csv;
 mod frames;
 pub mod html;
+pub mod mode;
 pub mod picture;
 pub mod view;
 pub mod vtk;
