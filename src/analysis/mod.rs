@@ -63,7 +63,7 @@ pub fn require_rest(sim: &crate::sim::Simulation, what: &str) -> Result<(), Stri
     let y = &sim.state().y;
     let (q, v) = y.split_at(y.len() / 2);
     let speed = v.iter().map(|x| x.abs()).fold(0.0, f64::max);
-    let fix = "linearize about an equilibrium: add `start = \"equilibrium\"` to the scene \
+    let fix = "it needs a static equilibrium at rest: add `start = \"equilibrium\"` to the scene \
                (and no `velocities`)";
     if speed > 0.0 {
         return Err(format!(
