@@ -1,5 +1,9 @@
 //! Files of a linear model: `.json`, `.npz` (numpy) and `.mat` (MATLAB), chosen by the
-//! extension. Every file names the states, inputs and outputs (the FMU's variable names).
+//! extension. Every file names the states, inputs and outputs (the FMU's variable names)
+//! and holds the same arrays under the same names ([`contents`]).
+
+mod mat;
+mod npz;
 
 use std::path::Path;
 
@@ -13,15 +17,53 @@ use crate::partial;
 pub fn write(path: &Path, model: &LinearModel, scene: &str) -> Result<(), String> {
     let ext = path.extension().and_then(|e| e.to_str()).unwrap_or("");
     let bytes = match ext {
-        "json" => to_json(model, scene).into_bytes(),
+        "json" => Ok(to_json(model, scene).into_bytes()),
+        "npz" => npz::to_npz(&contents(model, scene)),
+        "mat" => mat::to_mat(&contents(model, scene)),
         _ => {
             return Err(format!(
                 "-o {}: unknown format `.{ext}`; use .json, .npz or .mat",
                 path.display()
             ))
         }
-    };
+    }
+    .map_err(|e| format!("-o {}: {e}", path.display()))?;
     partial::write(path, &bytes)
+}
+
+/// Everything a `.npz` or `.mat` file holds, by variable name.
+pub struct Contents<'a> {
+    /// The scene's name.
+    pub scene: &'a str,
+    /// `A`, `B`, `C`, `D`.
+    pub matrices: [(&'static str, &'a DMatrix<f64>); 4],
+    /// `input_values`, `output_values`, `frequencies_hz`.
+    pub vectors: [(&'static str, &'a [f64]); 3],
+    /// `states`, `inputs`, `outputs`.
+    pub names: [(&'static str, &'a [String]); 3],
+}
+
+/// The arrays of `model`, named as in the JSON file.
+pub fn contents<'a>(model: &'a LinearModel, scene: &'a str) -> Contents<'a> {
+    Contents {
+        scene,
+        matrices: [
+            ("A", &model.a),
+            ("B", &model.b),
+            ("C", &model.c),
+            ("D", &model.d),
+        ],
+        vectors: [
+            ("input_values", &model.input_values),
+            ("output_values", &model.output_values),
+            ("frequencies_hz", &model.frequencies_hz),
+        ],
+        names: [
+            ("states", &model.states),
+            ("inputs", &model.inputs),
+            ("outputs", &model.outputs),
+        ],
+    }
 }
 
 fn rows(m: &DMatrix<f64>) -> Vec<Vec<f64>> {

@@ -1,0 +1,62 @@
+//! `.mat`: a MATLAB Level-5 MAT-file (what `save -v7` writes, here uncompressed; MATLAB's
+//! `load` and `scipy.io.loadmat` read it), written with matrw.
+
+use std::sync::atomic::{AtomicUsize, Ordering};
+
+use matrw::{CellArray, MatFile, MatVariable, MatlabType, NumericArray};
+
+use super::Contents;
+
+/// The `.mat` bytes: `A`…`D` as double matrices, the value vectors as double columns, the
+/// names as n×1 cell arrays of char row vectors and `scene` as a char row vector.
+pub fn to_mat(contents: &Contents) -> Result<Vec<u8>, String> {
+    let mut file = MatFile::new();
+    for (name, m) in contents.matrices {
+        file.insert(name, doubles(m.nrows(), m.ncols(), m.as_slice())?);
+    }
+    for (name, v) in contents.vectors {
+        file.insert(name, doubles(v.len(), 1, v)?);
+    }
+    for (name, list) in contents.names {
+        let cells = list.iter().map(|s| MatVariable::from(s.as_str())).collect();
+        let cells = CellArray::new(vec![list.len(), 1], cells).map_err(|e| e.to_string())?;
+        file.insert(name, MatVariable::CellArray(cells));
+    }
+    file.insert("scene", MatVariable::from(contents.scene));
+    let expected: Vec<String> = file.iter().map(|(name, _)| name.clone()).collect();
+    let bytes = serialize(file)?;
+    // matrw's writer does not report I/O errors: read the bytes back before trusting them.
+    let back = matrw::load_matfile_from_u8(&bytes)
+        .map_err(|e| format!("the MAT-file written does not read back: {e}"))?;
+    if let Some(missing) = expected.iter().find(|name| !back.contains(name)) {
+        return Err(format!("the MAT-file written lacks `{missing}`"));
+    }
+    Ok(bytes)
+}
+
+/// A double matrix from column-major values (nalgebra's and MATLAB's order).
+fn doubles(rows: usize, cols: usize, values: &[f64]) -> Result<MatVariable, String> {
+    NumericArray::new(vec![rows, cols], MatlabType::from(values.to_vec()), None)
+        .map(MatVariable::NumericArray)
+        .map_err(|e| e.to_string())
+}
+
+/// matrw saves to a path only: save to a private temporary file and take its bytes, so that
+/// the caller can write the target whole or not at all.
+fn serialize(file: MatFile) -> Result<Vec<u8>, String> {
+    static COUNTER: AtomicUsize = AtomicUsize::new(0);
+    let tmp = std::env::temp_dir().join(format!(
+        "tensegrity-fmu-{}-{}.mat",
+        std::process::id(),
+        COUNTER.fetch_add(1, Ordering::Relaxed)
+    ));
+    let path = tmp
+        .to_str()
+        .ok_or_else(|| format!("{}: not UTF-8", tmp.display()))?;
+    let saved = matrw::save_matfile_v7(path, file, false).map_err(|e| e.to_string());
+    let bytes = saved.and_then(|()| {
+        std::fs::read(&tmp).map_err(|e| format!("cannot read {}: {e}", tmp.display()))
+    });
+    let _ = std::fs::remove_file(&tmp);
+    bytes
+}
