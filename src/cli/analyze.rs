@@ -2,7 +2,7 @@
 //! start state, named with the FMU's variable names.
 
 use std::fmt::Write as _;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use serde_json::json;
 use tensegrity_fmu::analysis::modes::{ModeKind, Spectrum};
@@ -97,7 +97,7 @@ fn shapes_csv(sim: &Simulation, spectrum: &Spectrum) -> String {
 }
 
 /// `tensegrity-fmu linearize`: the state-space model about the start state, to `output`.
-pub fn linearize(scene: &Scene, output: &PathBuf) -> Result<(), String> {
+pub fn linearize(scene: &Scene, output: &Path) -> Result<(), String> {
     let sim = at_rest(scene, "linearize")?;
     let table = VariableTable::new(&sim);
     let channels: Vec<(String, InputChannel)> = table

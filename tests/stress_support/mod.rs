@@ -206,6 +206,7 @@ pub fn bare(name: &str, nodes: Vec<[f64; 3]>, fixed: Vec<usize>) -> Scene {
         ground: None,
         outputs: None,
         prestress: None,
+        start: Default::default(),
         solver: Default::default(),
     }
 }
