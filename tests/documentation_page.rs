@@ -1,15 +1,19 @@
 //! `documentation/index.html` (issue 10, item 9): a usage section, inputs and outputs
-//! before parameters, values by name and counts with the right plural.
+//! before parameters, values by name and counts with the right plural; the lowest natural
+//! frequencies about a start state at rest (issue 11, item 5).
 
-use tensegrity_fmu::fmi::documentation::index_html;
+use std::process::Command;
+
+use tensegrity_fmu::analysis;
+use tensegrity_fmu::fmi::documentation::{index_html, LISTED_MODES};
 use tensegrity_fmu::fmi::variables::VariableTable;
 use tensegrity_fmu::model::Model;
-use tensegrity_fmu::scene::{builtin, LoadSpec, PointMassSpec, Scene};
+use tensegrity_fmu::scene::{builtin, LoadSpec, PointMassSpec, Scene, Start};
 use tensegrity_fmu::sim::Simulation;
 
 fn page(scene: &Scene) -> String {
     let sim = Simulation::new(Model::new(scene).unwrap());
-    index_html(sim.model(), &VariableTable::new(&sim))
+    index_html(&sim, &VariableTable::new(&sim))
 }
 
 /// The cells of the table row of variable `name`.
@@ -123,4 +127,89 @@ fn counts_have_the_right_plural() {
     ] {
         assert!(!one.contains(wrong) && !two.contains(wrong), "{wrong:?}");
     }
+}
+
+/// The page of a scene at the start it asks for (the equilibrium with `start = "equilibrium"`),
+/// as `tensegrity-fmu build` writes it.
+fn built_page(scene: &Scene) -> String {
+    let sim = Simulation::new(analysis::load(scene).unwrap());
+    index_html(&sim, &VariableTable::new(&sim))
+}
+
+/// The rows (mode, frequency, kind) of the natural-frequency table.
+fn frequency_rows(html: &str) -> Vec<[String; 3]> {
+    let section = &html[pos(html, "<h2>Natural frequencies</h2>")..pos(html, "<h2>Variables</h2>")];
+    let Some(start) = section.find("<table>") else {
+        return Vec::new();
+    };
+    let table = &section[start..pos(section, "</table>")];
+    table
+        .split("<tr>")
+        .skip(2)
+        .map(|r| {
+            let cells: Vec<String> = r
+                .split("<td>")
+                .skip(1)
+                .map(|c| c.split("</td>").next().unwrap().to_string())
+                .collect();
+            [cells[0].clone(), cells[1].clone(), cells[2].clone()]
+        })
+        .collect()
+}
+
+#[test]
+fn lowest_natural_frequencies_are_those_of_the_modes_command() {
+    let out = Command::new(env!("CARGO_BIN_EXE_tensegrity-fmu"))
+        .args(["modes", "prism2-elastic", "--json"])
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let json: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let hz = json["frequencies_hz"].as_array().unwrap();
+    let kinds = json["kinds"].as_array().unwrap();
+    assert!(hz.len() > LISTED_MODES);
+    let rows = frequency_rows(&page(&builtin("prism2-elastic").unwrap()));
+    assert_eq!(rows.len(), LISTED_MODES);
+    for (k, row) in rows.iter().enumerate() {
+        let f = hz[k].as_f64().unwrap();
+        assert!(f > 0.0);
+        assert_eq!(row[0], (k + 1).to_string());
+        assert_eq!(row[1], format!("{f:.6}"), "mode {}", k + 1);
+        assert_eq!(row[2], kinds[k].as_str().unwrap(), "mode {}", k + 1);
+    }
+    // Lowest first.
+    let listed: Vec<f64> = rows.iter().map(|r| r[1].parse().unwrap()).collect();
+    assert!(listed.windows(2).all(|w| w[0] <= w[1]), "{listed:?}");
+}
+
+#[test]
+fn a_start_state_not_at_rest_gets_a_sentence_instead_of_frequencies() {
+    // Gravity on a prestressed structure drawn without it: an unbalanced force.
+    let mut scene = builtin("prism2-elastic").unwrap();
+    scene.gravity = Some([0.0, 0.0, -9.81]);
+    let html = page(&scene);
+    assert!(frequency_rows(&html).is_empty());
+    for phrase in [
+        "No natural frequencies are listed: the start state is not an equilibrium (unbalanced force",
+        "add <code>start = &quot;equilibrium&quot;</code> to the scene",
+    ] {
+        assert!(html.contains(phrase), "{phrase:?} missing");
+    }
+    // Moving at the start.
+    let mut moving = builtin("prism2-elastic").unwrap();
+    let mut v = vec![[0.0; 3]; moving.nodes.len()];
+    v[6] = [0.1, 0.0, 0.0];
+    moving.velocities = Some(v);
+    let html = page(&moving);
+    assert!(frequency_rows(&html).is_empty());
+    assert!(html.contains("No natural frequencies are listed: the start state is moving"));
+    // The fix the sentence names: the same scene started from its equilibrium.
+    scene.start = Start::Equilibrium;
+    let rows = frequency_rows(&built_page(&scene));
+    assert_eq!(rows.len(), LISTED_MODES);
+    assert!(rows.iter().all(|r| r[2] == "vibration"), "{rows:?}");
 }

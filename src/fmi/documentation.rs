@@ -4,8 +4,13 @@ use fmi2_model_description::Causality;
 
 use super::description::default_communication_step;
 use super::variables::{BaseType, Binding, Variable, VariableTable};
+use crate::analysis::modes::{ModeKind, Spectrum};
 use crate::integrator::Method;
 use crate::model::{CableLaw, Model};
+use crate::sim::Simulation;
+
+/// How many of the lowest natural frequencies the page lists.
+pub const LISTED_MODES: usize = 6;
 
 fn escape(s: &str) -> String {
     s.replace('&', "&amp;")
@@ -55,8 +60,24 @@ fn variable_table(h: &mut String, title: &str, variables: &[&Variable]) {
     h.push_str("</table>\n");
 }
 
-/// The HTML page shipped in the FMU.
-pub fn index_html(model: &Model, table: &VariableTable) -> String {
+/// Escapes `s` and sets its `backquoted` spans as code.
+fn escape_code(s: &str) -> String {
+    escape(s)
+        .split('`')
+        .enumerate()
+        .map(|(k, part)| {
+            if k % 2 == 1 {
+                format!("<code>{part}</code>")
+            } else {
+                part.to_string()
+            }
+        })
+        .collect()
+}
+
+/// The HTML page shipped in the FMU, for the simulation at its start state.
+pub fn index_html(sim: &Simulation, table: &VariableTable) -> String {
+    let model = sim.model();
     let scene = &model.scene;
     let mut h = String::new();
     h.push_str("<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">");
@@ -84,6 +105,7 @@ pub fn index_html(model: &Model, table: &VariableTable) -> String {
          style=\"width:100%;height:34em;border:1px solid #ccc\"></iframe>\n",
     );
     h.push_str("<p>Dynamics: Cheong, Skelton &amp; Cho (2014), non-minimal coordinates with the exact recursive bar-length and orthogonality correction after every internal step. Bar forces are positive in compression.</p>\n");
+    natural_frequencies(&mut h, sim);
     h.push_str("<h2>Variables</h2>\n");
     let of = |c: Causality| -> Vec<&Variable> {
         table
@@ -98,6 +120,44 @@ pub fn index_html(model: &Model, table: &VariableTable) -> String {
     variable_table(&mut h, "Parameters", &of(Causality::Parameter));
     h.push_str("</body></html>\n");
     h
+}
+
+/// The lowest natural frequencies about the start state (the spectrum of
+/// `tensegrity-fmu modes`), or why there are none: the start state is not at rest.
+fn natural_frequencies(h: &mut String, sim: &Simulation) {
+    h.push_str("<h2>Natural frequencies</h2>\n");
+    if let Err(why) = crate::analysis::require_rest(sim, "No natural frequencies are listed") {
+        h.push_str(&format!("<p>{}.</p>\n", escape_code(&why)));
+        return;
+    }
+    let y = &sim.state().y;
+    let spectrum = Spectrum::new(sim.model(), &sim.inputs, sim.time(), &y[..y.len() / 2]);
+    let listed = spectrum.modes.len().min(LISTED_MODES);
+    h.push_str(&format!(
+        "<p>The {} of the structure about its start state, an equilibrium at rest \
+         (linearized in the constrained coordinates, with the geometric stiffness of the \
+         prestress; <code>tensegrity-fmu modes</code> lists all {} and \
+         <code>tensegrity-fmu linearize</code> writes the state-space model):</p>\n",
+        if listed == 1 {
+            "lowest mode".to_string()
+        } else {
+            format!("{listed} lowest modes")
+        },
+        spectrum.modes.len(),
+    ));
+    h.push_str("<table><tr><th>mode</th><th>frequency (Hz)</th><th>kind</th></tr>\n");
+    for (k, mode) in spectrum.modes.iter().take(listed).enumerate() {
+        let kind = match mode.kind {
+            ModeKind::Unstable => format!("unstable (grows at {:.4e} 1/s)", mode.growth_rate()),
+            kind => kind.name().to_string(),
+        };
+        h.push_str(&format!(
+            "<tr><td>{}</td><td>{:.6}</td><td>{kind}</td></tr>\n",
+            k + 1,
+            mode.frequency_hz()
+        ));
+    }
+    h.push_str("</table>\n");
 }
 
 /// How to run the FMU, and what an importer must know about inputs.

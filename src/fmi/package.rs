@@ -83,7 +83,7 @@ pub fn build_fmu(scene: &Scene, binary: &Path, out: &Path) -> Result<Built, Stri
             binary.display()
         ));
     }
-    let html = index_html(sim.model(), &table);
+    let html = index_html(&sim, &table);
     // The FMI 2.0 icon and the documentation's viewer: the structure at its start.
     let start = sim.time();
     let at_start = Frames::record(&mut sim, &[start])?;
