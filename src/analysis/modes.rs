@@ -151,7 +151,7 @@ impl Spectrum {
         self.modes.iter().map(Mode::frequency_hz).collect()
     }
 
-    /// The lowest ω² of the modes that are neither rigid-body motions nor zero.
+    /// How many modes are of `kind`.
     pub fn count(&self, kind: ModeKind) -> usize {
         self.modes.iter().filter(|m| m.kind == kind).count()
     }

@@ -44,7 +44,7 @@ pub struct Tangent {
     pub constraints: DMatrix<f64>,
     /// Bars of the rows of `constraints`.
     pub constraint_bars: Vec<usize>,
-    /// End-space derivatives, kept to form input columns: the workspace of the evaluation.
+    /// The evaluation at this state (positions, γ, λ), kept to form input columns.
     pub workspace: Workspace,
     /// Generalized accelerations η̈₂ of this state.
     pub acceleration: DVector<f64>,
