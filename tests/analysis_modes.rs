@@ -6,6 +6,7 @@
 
 mod analysis_support;
 mod cli_support;
+#[allow(dead_code)] // only part of it is used here
 mod point_mass_support;
 
 use analysis_support::kkt_spectrum;

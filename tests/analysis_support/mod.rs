@@ -11,9 +11,10 @@ use tensegrity_fmu::Simulation;
 
 /// Central difference of `f` at step `h`, Richardson-extrapolated from `h` and `h/2`:
 /// `(4 D(h/2) − D(h)) / 3` has an O(h⁴) truncation error.
-pub fn richardson(h: f64, f: impl Fn(f64) -> DVector<f64>) -> DVector<f64> {
-    let d = |h: f64| (f(h) - f(-h)) / (2.0 * h);
-    (d(h / 2.0) * 4.0 - d(h)) / 3.0
+pub fn richardson(h: f64, mut f: impl FnMut(f64) -> DVector<f64>) -> DVector<f64> {
+    let mut d = |h: f64| (f(h) - f(-h)) / (2.0 * h);
+    let coarse = d(h);
+    (d(h / 2.0) * 4.0 - coarse) / 3.0
 }
 
 /// Largest |entry|.
@@ -96,8 +97,8 @@ impl EndKkt {
             node_ends[n].push(e);
         }
         let first: Vec<Option<usize>> = node_ends.iter().map(|e| e.first().copied()).collect();
-        for n in 0..n_nodes {
-            assert!(first[n].is_some() || model.pinned[n], "free bar-less node");
+        for (end, &pinned) in first.iter().zip(&model.pinned) {
+            assert!(end.is_some() || pinned, "free bar-less node");
         }
         let mut payload = vec![0.0; n_nodes];
         for pm in &model.scene.point_masses {
