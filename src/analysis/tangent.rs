@@ -311,8 +311,9 @@ fn put_cable(m: &mut DMatrix<f64>, col: usize, link: &CableLink, value: &Vector3
     }
 }
 
-/// Derivatives of the ground force at one node. The penalty's stiffness counts from the
-/// surface inward (`d ≥ 0`), so a node resting on the surface is held from the start.
+/// Derivatives of the ground force at one node. The penalty's stiffness counts from
+/// `TOUCHING` above the surface inward, so a node written onto the surface (within
+/// round-off of it) is held from the start.
 fn contact_derivatives(
     ground: &crate::model::contact::Ground,
     x: &Vector3<f64>,
@@ -321,9 +322,10 @@ fn contact_derivatives(
     let zero = (Matrix3::zeros(), Matrix3::zeros());
     let n = ground.normal;
     let d = ground.penetration(x);
-    if d < 0.0 {
+    if d < -TOUCHING {
         return zero;
     }
+    let d = d.max(0.0);
     let vn = n.dot(v);
     let fn_ = ground.stiffness * d - ground.damping * vn;
     if fn_ < 0.0 || (fn_ == 0.0 && d > 0.0) {
@@ -351,6 +353,9 @@ fn contact_derivatives(
     }
     (dx, dv)
 }
+
+/// How far above the ground a node still counts as touching it, m.
+const TOUCHING: f64 = 1e-9;
 
 fn add_block(m: &mut DMatrix<f64>, row: usize, col: usize, block: &Matrix3<f64>) {
     for r in 0..3 {
