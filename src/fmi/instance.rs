@@ -11,6 +11,7 @@ use super::variables::{Binding, VariableTable};
 use super::{guid_for, Category, Message, Mode, Status};
 use crate::dynamics::Inputs;
 use crate::scene::Scene;
+use crate::model::Model;
 use crate::sim::Simulation;
 
 /// A failed call: what the importer is told.
@@ -438,12 +439,19 @@ impl Core {
     /// A simulation of `scene`'s parameters with this one's inputs, time and, once
     /// initialized, its state: what a parameter change rebuilds.
     pub(super) fn rebuilt(&self, scene: &Scene) -> Result<Simulation, String> {
-        let mut sim = Simulation::new(crate::analysis::load(scene).map_err(|e| e.to_string())?);
-        sim.inputs = self.sim.inputs.clone();
-        if matches!(
+        let keeps_state = matches!(
             self.mode,
             Mode::StepComplete | Mode::Terminated | Mode::Error
-        ) {
+        );
+        // A kept state replaces the start positions, so the equilibrium is not solved again.
+        let model = if keeps_state {
+            Model::new(scene)
+        } else {
+            crate::analysis::load(scene)
+        };
+        let mut sim = Simulation::new(model.map_err(|e| e.to_string())?);
+        sim.inputs = self.sim.inputs.clone();
+        if keeps_state {
             sim.set_state(self.sim.state().clone());
         } else {
             sim.set_time(self.time);

@@ -76,7 +76,8 @@ impl Snapshot {
         let mut sim = if scene == core.scene {
             core.sim.clone()
         } else {
-            Simulation::new(crate::analysis::load(&scene).map_err(|e| e.to_string())?)
+            // The restored state replaces the start positions: no equilibrium solve.
+            Simulation::new(crate::model::Model::new(&scene).map_err(|e| e.to_string())?)
         };
         let sizes_match = self.state.y.len() == sim.state().y.len()
             && self.force_density.len() == sim.inputs.force_density.len()

@@ -1,11 +1,15 @@
 """Tunable parameters (issue 10, item 8): set between steps, re-validated, acting from the
 next step on with the running state kept; fixed ones stay refused without stopping the run."""
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 from fmpy.fmi1 import FMICallException
 
 from effects_scenes import COMM, G, dropped_fmu
+
+SCENES = Path(__file__).resolve().parents[2] / "fmu" / "scenes"
 
 
 @pytest.fixture(scope="module")
@@ -104,3 +108,22 @@ def test_fixed_parameters_stay_fixed(dropped, open_fmu, name, value):
     with pytest.raises(FMICallException):
         s.fmu.setBoolean(s.vrs(["solver.correction"]), [0])
     run_steps(s, 0, 3)
+
+
+def test_tunable_set_mid_run_keeps_the_state_of_an_equilibrium_start(fmus, open_fmu):
+    """A scene that starts at its equilibrium is not re-solved when a tunable parameter
+    changes mid-run: the running state is kept, so a gravity the structure could not stand
+    statically is accepted and acts (before, the set was refused: no stable equilibrium)."""
+    head, _, tail = (SCENES / "prism2-elastic.toml").read_text().partition("\n[[")
+    text = f'{head}\nstart = "equilibrium"\ngravity = [0.0, 0.0, -9.81]\n\n[[{tail}'
+    fmu = fmus.from_toml(text)
+    s = open_fmu(fmu).init()
+    z0 = s.get(["node[7].z"])[0]
+    for k in range(100):
+        s.fmu.doStep(k * 1e-3, 1e-3)
+    assert abs(s.get(["node[7].z"])[0] - z0) < 1e-9, "it starts at rest"
+    s.set({"gravity.z": -4905.0})
+    assert s.get(["gravity.z"])[0] == -4905.0
+    for k in range(100, 110):
+        s.fmu.doStep(k * 1e-3, 1e-3)
+    assert s.get(["node[7].z"])[0] < z0 - 1e-3, "the heavier gravity acts from the state kept"
