@@ -456,3 +456,59 @@ fn linearize_command_writes_the_model() {
     assert_eq!(v["states"].as_array().unwrap().len(), 24);
     assert_eq!(v["inputs"][0], lin.inputs[0]);
 }
+
+/// A force-density cable commanded at exactly 0 still acts for a positive command: its B
+/// column and its tension's D entry are those of the clamp's right side, equal to the
+/// model's at a start of 1e-12 N/m (where the law is smooth).
+#[test]
+fn a_force_density_commanded_at_zero_still_acts() {
+    let with_extra = |start: f64| {
+        let mut scene = builtin("prism2").unwrap();
+        let mut extra = scene.cables[0].clone();
+        extra.nodes = [1, 5];
+        extra.force_density = Some(start);
+        scene.prestress = None;
+        let model = analysis::load(&builtin("prism2").unwrap()).unwrap();
+        for (spec, &gamma) in scene.cables.iter_mut().zip(&model.controlled_start) {
+            spec.force_density = Some(gamma);
+        }
+        scene.cables.push(extra);
+        let sim = at_rest(&scene);
+        let outputs = outputs::outputs(&sim);
+        linearize(&sim, &channels(&sim), &outputs)
+    };
+    let (zero, tiny) = (with_extra(0.0), with_extra(1e-12));
+    let col = zero
+        .inputs
+        .iter()
+        .position(|i| i == "cable[16].force_density")
+        .unwrap();
+    let row = zero
+        .outputs
+        .iter()
+        .position(|o| o == "cable[16].tension")
+        .unwrap();
+    // Node accelerations per unit command (independent of how repeated modes are split).
+    let node_response = |lin: &LinearModel| {
+        let m = lin.states.len() / 2;
+        let pos: Vec<usize> = (0..lin.outputs.len())
+            .filter(|&r| lin.outputs[r].starts_with("node[") && !lin.outputs[r].contains(".v"))
+            .collect();
+        let c = DMatrix::from_fn(pos.len(), m, |r, k| lin.c[(pos[r], k)]);
+        c * lin.b.view((m, col), (m, 1))
+    };
+    let (r0, r1) = (node_response(&zero), node_response(&tiny));
+    let b0 = r0.norm();
+    let diff = (&r0 - &r1).norm();
+    println!(
+        "cable[16] at 0: node accelerations per N/m {b0:.4e} m/s², vs at 1e-12 N/m {diff:.1e}; D {:.6}",
+        zero.d[(row, col)]
+    );
+    assert!(b0 > 0.1, "the command acts: {b0}");
+    // The two models' spectra agree to round-off of the eigensolver (1e-9 measured).
+    assert!(diff <= 1e-7 * b0, "{diff:e}");
+    let s = (Vector3::from(builtin("prism2").unwrap().nodes[4])
+        - Vector3::from(builtin("prism2").unwrap().nodes[0]))
+    .norm();
+    assert!((zero.d[(row, col)] - s).abs() < 1e-12, "D = |s| = {s}");
+}

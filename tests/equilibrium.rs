@@ -5,6 +5,7 @@
 
 use nalgebra::Vector3;
 use tensegrity_fmu::analysis;
+use tensegrity_fmu::analysis::modes::{ModeKind, Spectrum};
 use tensegrity_fmu::scene::{builtin, tower_scene, GroundSpec, PrestressSpec, Scene, Start};
 use tensegrity_fmu::Simulation;
 
@@ -193,4 +194,75 @@ fn a_structure_too_large_for_the_dense_solve_is_refused_up_front() {
     let mut given = scene;
     given.start = Start::AsGiven;
     assert!(analysis::load(&given).is_ok());
+}
+
+#[test]
+fn a_single_pin_leaves_three_rigid_rotations_not_a_mechanism() {
+    let mut scene = builtin("prism2-elastic").unwrap();
+    scene.fixed = vec![1];
+    let model = analysis::load(&settled(scene)).expect("a prism on one pin has an equilibrium");
+    let sim = Simulation::new(model);
+    let y = &sim.state().y;
+    let spectrum = Spectrum::new(sim.model(), &sim.inputs, 0.0, &y[..y.len() / 2]);
+    println!("one pin: {:?}", &spectrum.frequencies_hz()[..5]);
+    assert_eq!(spectrum.count(ModeKind::RigidBody), 3);
+    assert_eq!(spectrum.count(ModeKind::Mechanism), 0);
+    assert_eq!(
+        spectrum.count(ModeKind::Vibration),
+        spectrum.modes.len() - 3
+    );
+}
+
+#[test]
+fn a_steel_stiff_prism_with_little_prestress_is_stable_not_a_mechanism() {
+    // κ = 1e7 N/m and 0.01 N of prestress: the prestress mode is 1e-11 of the stiffest.
+    let mut scene = builtin("prism2-elastic").unwrap();
+    for cable in &mut scene.cables {
+        cable.stiffness = Some(1e7);
+    }
+    scene.prestress = Some(PrestressSpec { min_tension: 0.01 });
+    let model = analysis::load(&settled(scene)).expect("at its own equilibrium already");
+    println!("steel prism: {}", model.start.unwrap());
+    let sim = Simulation::new(model);
+    let y = &sim.state().y;
+    let spectrum = Spectrum::new(sim.model(), &sim.inputs, 0.0, &y[..y.len() / 2]);
+    let f = spectrum.frequencies_hz();
+    println!(
+        "steel prism: lowest {:.4} Hz, highest {:.1} Hz",
+        f[0],
+        f[f.len() - 1]
+    );
+    assert_eq!(spectrum.count(ModeKind::Vibration), 12);
+    assert!(f[0] > 0.01 && f[0] < 0.05, "prestress mode {} Hz", f[0]);
+}
+
+#[test]
+fn a_structure_above_its_ground_is_told_to_stand_on_it() {
+    let mut scene = free_prism_on_ground(0.0);
+    for node in &mut scene.nodes {
+        node[2] += 0.01;
+    }
+    let err = analysis::load(&settled(scene)).unwrap_err().to_string();
+    println!("{err}");
+    assert!(
+        err.contains("no node touches the ground (the lowest is 1.000e-2 m above it)"),
+        "{err}"
+    );
+    assert!(err.contains("place it on the ground"), "{err}");
+}
+
+#[test]
+fn analyses_of_a_moving_start_ask_to_remove_the_velocities() {
+    let mut scene = settled(builtin("prism2-elastic").unwrap());
+    scene.velocities = Some(
+        vec![[0.0, 0.0, 0.0]; 6]
+            .into_iter()
+            .chain([[0.1, 0.0, 0.0]; 3])
+            .collect(),
+    );
+    let sim = Simulation::new(analysis::load(&scene).unwrap());
+    let err = analysis::require_rest(&sim, "modes").unwrap_err();
+    println!("{err}");
+    assert!(err.starts_with("modes: the start state is moving"), "{err}");
+    assert!(err.ends_with("remove `velocities` from the scene"), "{err}");
 }

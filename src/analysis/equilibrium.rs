@@ -6,16 +6,19 @@
 
 use nalgebra::{DVector, SymmetricEigen, Vector3};
 
-use super::modes::{ModeKind, Spectrum, ZERO_STIFFNESS};
+use super::modes::{ModeKind, Spectrum};
 use super::{Reduced, Tangent};
 use crate::dynamics::{self, Inputs, Workspace};
 use crate::error::SceneError;
-use crate::model::{Model, StartReport};
+use crate::model::{CableLaw, Model, StartReport};
 
 /// Newton iterations before the solve gives up.
 pub const MAX_ITERATIONS: usize = 100;
 /// Converged when `‖M̄ η̈₂‖` is below this fraction of the applied forces' size.
 pub const TOLERANCE: f64 = 1e-11;
+/// Stiffness eigenvalues below this fraction of the largest are not inverted by a Newton
+/// step (rigid motions, mechanisms, round-off).
+const SINGULAR: f64 = 1e-9;
 /// A stalled line search still counts as converged below this fraction (round-off).
 const ROUND_OFF: f64 = 1e-9;
 
@@ -57,6 +60,7 @@ pub fn solve(model: &Model, inputs: &Inputs) -> Result<Settled, SceneError> {
     let mut residual = residual(model, inputs, &q, &mut ws);
     let scale = force_scale(&ws);
     let tolerance = TOLERANCE * scale;
+    let round_off = (ROUND_OFF * scale).max(round_off_floor(model, &ws));
     let mut iterations = 0;
     'newton: while residual > tolerance {
         if iterations == MAX_ITERATIONS {
@@ -71,7 +75,8 @@ pub fn solve(model: &Model, inputs: &Inputs) -> Result<Settled, SceneError> {
         let tangent = Tangent::new(model, inputs, 0.0, &q, &vec![0.0; q.len()]);
         let reduced = Reduced::new(&tangent);
         let r = reduced.basis.tr_mul(&tangent.force);
-        let step = newton_step(&reduced, &r, scale)?;
+        let step = newton_step(&reduced, &r, scale)
+            .map_err(|unbalanced| cannot_carry(model, &ws, unbalanced))?;
         let direction = &reduced.basis * step;
         let mut alpha = 1.0;
         loop {
@@ -88,7 +93,7 @@ pub fn solve(model: &Model, inputs: &Inputs) -> Result<Settled, SceneError> {
                 break;
             }
             alpha *= 0.5;
-            if alpha < 1e-10 && residual <= ROUND_OFF * scale {
+            if alpha < 1e-10 && residual <= round_off {
                 // No step improves on round-off: converged as far as doubles allow.
                 break 'newton;
             }
@@ -96,7 +101,9 @@ pub fn solve(model: &Model, inputs: &Inputs) -> Result<Settled, SceneError> {
                 return Err(failure(format!(
                     "Newton's method stalled after {iterations} iterations (force residual \
                      {residual:.3e} N): no step along the tangent reduces the unbalanced \
-                     force; the structure may have no equilibrium near the given geometry"
+                     force; the structure may have no equilibrium near the given geometry \
+                     (a load beyond what it carries, cables going slack); lower the loads, \
+                     raise the prestress, or use start = \"as_given\""
                 )));
             }
         }
@@ -120,12 +127,9 @@ pub fn solve(model: &Model, inputs: &Inputs) -> Result<Settled, SceneError> {
 }
 
 /// `Δξ = K_ξ⁻¹ r` through the eigenvectors of `K_ξ`, with `|eigenvalue|` so that a saddle
-/// is left, not approached. A force along a zero-stiffness direction cannot be balanced.
-fn newton_step(
-    reduced: &Reduced,
-    r: &DVector<f64>,
-    scale: f64,
-) -> Result<DVector<f64>, SceneError> {
+/// is left, not approached. A force along a zero-stiffness direction cannot be balanced:
+/// its size comes back as the error.
+fn newton_step(reduced: &Reduced, r: &DVector<f64>, scale: f64) -> Result<DVector<f64>, f64> {
     let eigen = SymmetricEigen::new(reduced.stiffness.clone());
     let largest = eigen.eigenvalues.amax().max(f64::MIN_POSITIVE);
     let mut step = DVector::zeros(r.len());
@@ -133,21 +137,38 @@ fn newton_step(
         let v = eigen.eigenvectors.column(k);
         let along = v.dot(r);
         let value = eigen.eigenvalues[k];
-        if value.abs() <= ZERO_STIFFNESS * largest {
+        if value.abs() <= SINGULAR * largest {
             if along.abs() > 1e-6 * scale {
-                return Err(failure(format!(
-                    "a load it cannot carry: {:.3e} N of unbalanced force acts along a \
-                     direction the structure does not resist (a free fall, a rigid-body \
-                     motion or a mechanism); pin it, give it a ground to stand on, or \
-                     balance the loads",
-                    along.abs()
-                )));
+                return Err(along.abs());
             }
             continue;
         }
         step += v * (along / value.abs());
     }
     Ok(step)
+}
+
+/// Why an unbalanced force along an unresisted direction cannot be carried.
+fn cannot_carry(model: &Model, ws: &Workspace, unbalanced: f64) -> SceneError {
+    let lowest = model.ground.as_ref().and_then(|ground| {
+        ground
+            .nodes
+            .iter()
+            .map(|&(n, _)| -ground.penetration(&ws.node_pos[n]))
+            .min_by(f64::total_cmp)
+    });
+    match lowest {
+        Some(gap) if gap > 1e-9 => failure(format!(
+            "a load it cannot carry: {unbalanced:.3e} N of unbalanced force, and no node \
+             touches the ground (the lowest is {gap:.3e} m above it), so nothing holds the \
+             structure up; place it on the ground, its lowest node on the surface"
+        )),
+        _ => failure(format!(
+            "a load it cannot carry: {unbalanced:.3e} N of unbalanced force acts along a \
+             direction the structure does not resist (a free fall, a rigid-body motion or \
+             a mechanism); pin it, give it a ground to stand on, or balance the loads"
+        )),
+    }
 }
 
 fn check_stable(model: &Model, inputs: &Inputs, q: &[f64]) -> Result<(), SceneError> {
@@ -191,11 +212,29 @@ fn project(model: &Model, q: &mut [f64]) {
     model.correction.correct_positions(&model.coords, q);
 }
 
-/// The unbalanced force at rest at `q`, and the size of the applied forces, N.
-pub fn unbalanced(model: &Model, inputs: &Inputs, q: &[f64]) -> (f64, f64) {
+/// The unbalanced force at rest at `q`, the size of the applied forces, and the
+/// round-off level of the cable forces, N.
+pub fn unbalanced(model: &Model, inputs: &Inputs, q: &[f64]) -> (f64, f64, f64) {
     let mut ws = Workspace::new(model);
     let r = residual(model, inputs, q, &mut ws);
-    (r, force_scale(&ws))
+    (r, force_scale(&ws), round_off_floor(model, &ws))
+}
+
+/// What round-off leaves of stiff cables' forces, N: `κ (|s| − s₀)` loses about `ε κ |s|`
+/// per cable, so a steel-stiff structure at its exact equilibrium still shows this much.
+fn round_off_floor(model: &Model, ws: &Workspace) -> f64 {
+    let stiff: f64 = model
+        .cables
+        .iter()
+        .map(|c| match c.law {
+            CableLaw::Elastic { stiffness, .. }
+            | CableLaw::RestLengthControlled { stiffness, .. } => {
+                stiffness * (ws.node_pos[c.nodes[1]] - ws.node_pos[c.nodes[0]]).norm()
+            }
+            CableLaw::Controlled { .. } => 0.0,
+        })
+        .sum();
+    64.0 * f64::EPSILON * stiff
 }
 
 /// `‖M̄ η̈₂‖` at rest, N: zero exactly at an equilibrium.

@@ -206,7 +206,10 @@ impl Context<'_> {
         let len = s.norm();
         let unit = s / len;
         let gamma = ws.gamma[j];
-        if gamma <= 0.0 {
+        // A commanded density at 0 still acts for increasing u (the clamp's right side).
+        let commanded_at_zero = matches!(cable.law, CableLaw::Controlled { input }
+            if self.inputs.force_density[input] >= 0.0);
+        if gamma <= 0.0 && !commanded_at_zero {
             return;
         }
         // T = γ|s|: dT = (κ or γ) û·ds + c û·dṡ, plus the input's own term.

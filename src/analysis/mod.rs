@@ -35,8 +35,9 @@ pub fn load(scene: &Scene) -> Result<Model, SceneError> {
 }
 
 /// Most reduced coordinates (3r) the dense analyses take: their cost grows as the cube
-/// (900 coordinates, a 100-stage tower: about 4 s for the equilibrium check and 4 s for the
-/// modes on this project's 2-core machine), so 1500 bounds each at about 20 s.
+/// (900 coordinates, a 100-stage tower: about 4 s for the equilibrium check and 4 s for
+/// the modes on this project's 2-core machine; near 1500, about a minute for `modes` and
+/// two for `linearize`), so larger structures are refused up front.
 pub const MAX_COORDINATES: usize = 1500;
 
 /// Refuses a model too large for the dense analyses, naming `what` asks and the fix.
@@ -63,15 +64,20 @@ pub fn require_rest(sim: &crate::sim::Simulation, what: &str) -> Result<(), Stri
     let y = &sim.state().y;
     let (q, v) = y.split_at(y.len() / 2);
     let speed = v.iter().map(|x| x.abs()).fold(0.0, f64::max);
-    let fix = "it needs a static equilibrium at rest: add `start = \"equilibrium\"` to the scene \
-               (and no `velocities`)";
+    let fix = if model.scene.velocities.is_some() {
+        "it needs the structure at rest: remove `velocities` from the scene"
+    } else if model.scene.start == Start::Equilibrium {
+        "it needs a static equilibrium at rest"
+    } else {
+        "it needs a static equilibrium at rest: add `start = \"equilibrium\"` to the scene"
+    };
     if speed > 0.0 {
         return Err(format!(
             "{what}: the start state is moving (velocities up to {speed:.3e} m/s); {fix}"
         ));
     }
-    let (residual, scale) = equilibrium::unbalanced(model, &sim.inputs, q);
-    if residual > REST_TOLERANCE * scale {
+    let (residual, scale, round_off) = equilibrium::unbalanced(model, &sim.inputs, q);
+    if residual > (REST_TOLERANCE * scale).max(round_off) {
         return Err(format!(
             "{what}: the start state is not an equilibrium (unbalanced force {residual:.3e} N \
              against {scale:.3e} N of applied forces); {fix}"

@@ -12,8 +12,12 @@ use super::{Reduced, Tangent};
 use crate::dynamics::Inputs;
 use crate::model::Model;
 
-/// Relative size below which a stiffness eigenvalue counts as zero.
-pub const ZERO_STIFFNESS: f64 = 1e-9;
+/// Relative size (of the largest ω²) below which a mode that is not a rigid motion counts
+/// as a mechanism: a few hundred times round-off in assembling and reducing K.
+pub const MECHANISM: f64 = 1e-12;
+/// Relative size below which a rigid motion the supports allow counts as unresisted (at
+/// an equilibrium its stiffness is the unbalanced force's, round-off on the solve).
+const RIGID_STIFFNESS: f64 = 1e-8;
 
 /// What a mode is.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -104,38 +108,40 @@ impl Spectrum {
             .try_inverse()
             .expect("a Cholesky factor is invertible");
         let a = &l_inv * &reduced.stiffness * l_inv.transpose();
-        let eigen = SymmetricEigen::new((&a + a.transpose()) * 0.5);
-        let mut order: Vec<usize> = (0..m).collect();
-        order.sort_by(|&x, &y| eigen.eigenvalues[x].total_cmp(&eigen.eigenvalues[y]));
-        let scale = eigen.eigenvalues.amax().max(f64::MIN_POSITIVE);
-        let zero = |v: f64| v.abs() <= ZERO_STIFFNESS * scale;
-        // Eigenvectors in y = Lᵀ ξ; the zero cluster is rotated so rigid motions come first.
-        let mut vectors: Vec<(f64, DVector<f64>)> = order
-            .iter()
-            .map(|&k| {
+        let a = (&a + a.transpose()) * 0.5;
+        let scale = a.amax().max(f64::MIN_POSITIVE);
+        // In y = Lᵀ ξ the mass is the identity: rigid motions with no stiffness are taken
+        // out first, the rest is an ordinary symmetric eigenproblem on their complement.
+        let rigid = zero_stiffness_rigid_motions(model, tangent, &reduced, &l, &a, scale);
+        let complement = orthogonal_complement(&rigid, m);
+        let eigen = SymmetricEigen::new(complement.tr_mul(&(&a * &complement)));
+        let largest = eigen.eigenvalues.amax().max(f64::MIN_POSITIVE);
+        let mut others: Vec<(f64, DVector<f64>)> = (0..complement.ncols())
+            .map(|k| {
                 (
                     eigen.eigenvalues[k],
-                    eigen.eigenvectors.column(k).into_owned(),
+                    &complement * eigen.eigenvectors.column(k),
                 )
             })
             .collect();
-        let zero_idx: Vec<usize> = (0..m).filter(|&k| zero(vectors[k].0)).collect();
-        let rigid_count = rotate_rigid_first(model, tangent, &reduced, &l, &mut vectors, &zero_idx);
-        let modes = vectors
-            .into_iter()
-            .enumerate()
-            .map(|(k, (value, y))| {
-                let kind = if let Some(p) = zero_idx.iter().position(|&z| z == k) {
-                    if p < rigid_count {
-                        ModeKind::RigidBody
-                    } else {
-                        ModeKind::Mechanism
-                    }
-                } else if value < 0.0 {
-                    ModeKind::Unstable
-                } else {
-                    ModeKind::Vibration
-                };
+        others.sort_by(|x, y| x.0.total_cmp(&y.0));
+        let rigid_modes = rigid.column_iter().map(|y| {
+            let y = y.into_owned();
+            (y.dot(&(&a * &y)), y, ModeKind::RigidBody)
+        });
+        let other_modes = others.into_iter().map(|(value, y)| {
+            let kind = if value.abs() <= MECHANISM * largest {
+                ModeKind::Mechanism
+            } else if value < 0.0 {
+                ModeKind::Unstable
+            } else {
+                ModeKind::Vibration
+            };
+            (value, y, kind)
+        });
+        let modes = rigid_modes
+            .chain(other_modes)
+            .map(|(value, y, kind)| {
                 let xi = l
                     .transpose()
                     .solve_upper_triangular(&y)
@@ -184,80 +190,112 @@ fn shape(model: &Model, tangent: &Tangent, q: DVector<f64>, value: f64, kind: Mo
     }
 }
 
-/// Counts the rigid-body motions inside the zero cluster and rotates the cluster's basis
-/// so that they come first. Only an unpinned structure has rigid-body motions.
-fn rotate_rigid_first(
+/// The rigid motions the supports allow (translations and rotations that move no pinned
+/// node) that the stiffness does not resist, as orthonormal columns in y = Lᵀ ξ.
+fn zero_stiffness_rigid_motions(
     model: &Model,
     tangent: &Tangent,
     reduced: &Reduced,
     l: &DMatrix<f64>,
-    vectors: &mut [(f64, DVector<f64>)],
-    zero_idx: &[usize],
-) -> usize {
-    let anchored = model.pinned.iter().any(|&p| p);
-    if anchored || zero_idx.is_empty() {
-        return 0;
+    a: &DMatrix<f64>,
+    scale: f64,
+) -> DMatrix<f64> {
+    let m = a.nrows();
+    let allowed = allowed_rigid_motions(model, tangent);
+    if allowed.ncols() == 0 {
+        return DMatrix::zeros(m, 0);
     }
-    // The six rigid fields of the ends, mapped to y = Lᵀ Zᵀ J_eᵀ δx_E, orthonormalized.
     let n_ends = model.coords.n_ends();
     let ws = &tangent.workspace;
     let centre = ws.end_pos.iter().sum::<Vector3<f64>>() / n_ends as f64;
-    let mut fields = DMatrix::zeros(3 * n_ends, 6);
+    let mut fields = DMatrix::zeros(3 * n_ends, allowed.ncols());
     for e in 0..n_ends {
         let p = ws.end_pos[e] - centre;
-        for axis in 0..3 {
-            fields[(3 * e + axis, axis)] = 1.0;
-            let w = Vector3::ith(axis, 1.0).cross(&p);
+        for (c, motion) in allowed.column_iter().enumerate() {
+            let d = Vector3::new(motion[0], motion[1], motion[2])
+                + Vector3::new(motion[3], motion[4], motion[5]).cross(&p);
             for k in 0..3 {
-                fields[(3 * e + k, 3 + axis)] = w[k];
+                fields[(3 * e + k, c)] = d[k];
             }
         }
     }
     let y = l.transpose() * reduced.basis.tr_mul(&tangent.ends.tr_mul(&fields));
-    let rigid = y.svd(true, false);
-    let u = rigid.u.expect("requested U");
-    let s_max = rigid.singular_values.max();
-    let rigid_basis: Vec<DVector<f64>> = (0..rigid.singular_values.len())
-        .filter(|&k| rigid.singular_values[k] > 1e-8 * s_max)
-        .map(|k| u.column(k).into_owned())
+    let basis = orthonormal_columns(&y);
+    if basis.ncols() == 0 {
+        return basis;
+    }
+    let within = SymmetricEigen::new(basis.tr_mul(&(a * &basis)));
+    let free: Vec<DVector<f64>> = (0..basis.ncols())
+        .filter(|&k| within.eigenvalues[k].abs() <= RIGID_STIFFNESS * scale)
+        .map(|k| &basis * within.eigenvectors.column(k))
         .collect();
-    let cluster = DMatrix::from_columns(
-        &zero_idx
-            .iter()
-            .map(|&k| vectors[k].1.clone())
-            .collect::<Vec<_>>(),
-    );
-    let r = DMatrix::from_columns(&rigid_basis);
-    // Principal directions between the cluster and the rigid fields.
-    let overlap = cluster.tr_mul(&r).svd(true, false);
-    let u = overlap.u.expect("requested U");
-    let mut order: Vec<usize> = (0..overlap.singular_values.len()).collect();
-    order.sort_by(|&a, &b| overlap.singular_values[b].total_cmp(&overlap.singular_values[a]));
-    let count = order
-        .iter()
-        .filter(|&&k| overlap.singular_values[k] > 1.0 - 1e-6)
-        .count();
-    let rotation = DMatrix::from_columns(&order.iter().map(|&k| u.column(k)).collect::<Vec<_>>());
-    let mut rotated = &cluster * &rotation;
-    // `svd` leaves U thin when the cluster is larger than the rigid space: complete it.
-    if rotated.ncols() < zero_idx.len() {
-        rotated = complete(&cluster, &rotated);
-    }
-    for (c, &k) in zero_idx.iter().enumerate() {
-        vectors[k].1 = rotated.column(c).into_owned();
-    }
-    count
+    stack(m, &free)
 }
 
-/// Extends orthonormal columns `part` (inside span `all`) to an orthonormal basis of it.
-fn complete(all: &DMatrix<f64>, part: &DMatrix<f64>) -> DMatrix<f64> {
-    let residual = all - part * part.tr_mul(all);
-    let svd = residual.svd(true, false);
+/// Combinations (6 × k: translation, rotation about the ends' centroid) of rigid motions
+/// that keep every pinned node in place: all six without pins, rotations about the axis
+/// through two pins, none with three pins off one line.
+fn allowed_rigid_motions(model: &Model, tangent: &Tangent) -> DMatrix<f64> {
+    let ws = &tangent.workspace;
+    let n_ends = model.coords.n_ends();
+    let centre = ws.end_pos.iter().sum::<Vector3<f64>>() / n_ends as f64;
+    let pins: Vec<Vector3<f64>> = (0..model.n_nodes())
+        .filter(|&n| model.pinned[n])
+        .map(|n| model.positions[n] - centre)
+        .collect();
+    if pins.is_empty() {
+        return DMatrix::identity(6, 6);
+    }
+    // Displacement of pin p: t + ω × p = t − [p]× ω.
+    let mut rows = DMatrix::zeros(3 * pins.len(), 6);
+    for (k, p) in pins.iter().enumerate() {
+        for i in 0..3 {
+            rows[(3 * k + i, i)] = 1.0;
+        }
+        let skew = -p.cross_matrix();
+        rows.view_mut((3 * k, 3), (3, 3)).copy_from(&skew);
+    }
+    let size = rows.amax().max(1.0);
+    let eigen = SymmetricEigen::new(rows.tr_mul(&rows));
+    let keep: Vec<DVector<f64>> = (0..6)
+        .filter(|&k| eigen.eigenvalues[k] <= 1e-12 * size * size)
+        .map(|k| eigen.eigenvectors.column(k).into_owned())
+        .collect();
+    stack(6, &keep)
+}
+
+/// An orthonormal basis of the column space of `y` (columns that are numerically
+/// dependent dropped).
+fn orthonormal_columns(y: &DMatrix<f64>) -> DMatrix<f64> {
+    let svd = y.clone().svd(true, false);
     let u = svd.u.expect("requested U");
-    let mut order: Vec<usize> = (0..svd.singular_values.len()).collect();
-    order.sort_by(|&a, &b| svd.singular_values[b].total_cmp(&svd.singular_values[a]));
-    let extra = all.ncols() - part.ncols();
-    let mut columns: Vec<DVector<f64>> = part.column_iter().map(|c| c.into_owned()).collect();
-    columns.extend(order[..extra].iter().map(|&k| u.column(k).into_owned()));
-    DMatrix::from_columns(&columns)
+    let top = svd.singular_values.max();
+    let keep: Vec<DVector<f64>> = (0..svd.singular_values.len())
+        .filter(|&k| svd.singular_values[k] > 1e-8 * top)
+        .map(|k| u.column(k).into_owned())
+        .collect();
+    stack(y.nrows(), &keep)
+}
+
+/// An orthonormal basis of the complement of the orthonormal columns `r` in ℝᵐ.
+fn orthogonal_complement(r: &DMatrix<f64>, m: usize) -> DMatrix<f64> {
+    if r.ncols() == 0 {
+        return DMatrix::identity(m, m);
+    }
+    let projector = DMatrix::identity(m, m) - r * r.transpose();
+    let eigen = SymmetricEigen::new(projector);
+    let keep: Vec<DVector<f64>> = (0..m)
+        .filter(|&k| eigen.eigenvalues[k] > 0.5)
+        .map(|k| eigen.eigenvectors.column(k).into_owned())
+        .collect();
+    stack(m, &keep)
+}
+
+/// Columns side by side (`rows × 0` when there are none).
+fn stack(rows: usize, columns: &[DVector<f64>]) -> DMatrix<f64> {
+    if columns.is_empty() {
+        DMatrix::zeros(rows, 0)
+    } else {
+        DMatrix::from_columns(columns)
+    }
 }

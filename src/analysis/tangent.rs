@@ -144,7 +144,8 @@ impl Tangent {
             match effect {
                 ForceEffect::ForceDensityCables(cables) => {
                     for (link, input) in cables {
-                        if inputs.force_density[*input] <= 0.0 {
+                        // At 0 the derivative for increasing u: a positive command pulls.
+                        if inputs.force_density[*input] < 0.0 {
                             continue;
                         }
                         let col = channels

@@ -10,8 +10,8 @@ use super::snapshot::Snapshot;
 use super::variables::{Binding, VariableTable};
 use super::{guid_for, Category, Message, Mode, Status};
 use crate::dynamics::Inputs;
-use crate::scene::Scene;
 use crate::model::Model;
+use crate::scene::Scene;
 use crate::sim::Simulation;
 
 /// A failed call: what the importer is told.
