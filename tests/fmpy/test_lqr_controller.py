@@ -73,3 +73,17 @@ def test_the_gain_is_designed_on_the_fmu_variables(prism2, cli, tmp_path):
         assert lin.u0[name] == pytest.approx(float(prism2.variables[name].start))
     # Closed loop asymptotically stable.
     assert law.closed_loop.real.max() < -0.1
+
+
+def test_without_control_the_same_pulse_leaves_node_7_offset(prism2):
+    """Held inputs: the pulse's energy stays in the structure, so node 7 keeps swinging
+    by centimetres; the LQR's bounds above would fail without the feedback."""
+    times, node, _ = lqr_controller.run(
+        prism2.path, lqr_controller.OpenLoop(), stop=STOP, step=STEP, pulse=PULSE, out=None
+    )
+    late, _ = lqr_controller.excursion(times, node, after=5.0)
+    peak, final = lqr_controller.excursion(times, node)
+    print(f"\nopen loop: peak {1e3 * peak:.1f} mm, after 5 s up to {1e3 * late:.1f} mm, "
+          f"final {1e3 * final:.1f} mm")
+    assert late > 0.05, late
+    assert final > 0.01, final
