@@ -158,13 +158,15 @@ impl Rate {
     pub fn describe(&self, model: &Model, inputs: &Inputs) -> String {
         let at = self.node.map_or(String::new(), |n| node_mass(model, n));
         match &self.cause {
-            Cause::Cables { cables, share, .. } => format!(
+            Cause::Cables { cables, share, .. } => {
+                format!(
                 "the stiffness of {}, {} {:.0} % of the fastest mode's stiffness (the mode moves \
                  {at} most)",
                 cable_list(model, inputs, cables),
                 if cables.len() > 1 { "together" } else { "alone" },
                 100.0 * share,
-            ),
+            )
+            }
             Cause::GroundPenalty => {
                 let g = model.ground.as_ref().expect("a ground");
                 let w = contact_compliance(model).0;
@@ -344,7 +346,10 @@ fn family(model: &Model, inputs: &Inputs, stiff: &[usize]) -> Vec<usize> {
 /// The cables' stiffness (or force density) cut to `factor` times the weakest's.
 fn soften(model: &Model, inputs: &Inputs, cables: &[usize], factor: f64) -> String {
     let mut parts = Vec::new();
-    for (kind, what, verb) in [(true, "stiffness", "soften"), (false, "force density", "lower")] {
+    for (kind, what, verb) in [
+        (true, "stiffness", "soften"),
+        (false, "force density", "lower"),
+    ] {
         let values: Vec<f64> = cables
             .iter()
             .map(|&j| strength(&model.cables[j].law, inputs))
@@ -357,7 +362,11 @@ fn soften(model: &Model, inputs: &Inputs, cables: &[usize], factor: f64) -> Stri
         let which = match cables {
             [j] => format!("cables[{}]", j + 1),
             _ if values.len() == 1 => "that cable".to_string(),
-            _ => format!("the {} cables of {what} ≥ {} N/m", values.len(), num(weakest)),
+            _ => format!(
+                "the {} cables of {what} ≥ {} N/m",
+                values.len(),
+                num(weakest)
+            ),
         };
         parts.push(format!(
             "{verb} {which} to {what} ≤ {} N/m",
