@@ -123,7 +123,7 @@ pub fn attribute(model: &Model, inputs: &Inputs, x: &[Vector3<f64>], dx: &[Vecto
     });
     let total = cables.iter().sum::<f64>() + ground;
     let largest = cables.iter().copied().fold(0.0, f64::max);
-    let cause = if !(total > 0.0) {
+    let cause = if total.is_nan() || total <= 0.0 {
         Cause::Structure
     } else if ground > largest {
         Cause::GroundPenalty
