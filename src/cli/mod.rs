@@ -273,6 +273,12 @@ fn build(scene_arg: &str, output: Option<PathBuf>, binary: Option<PathBuf>) -> R
     if let Some(start) = built.start {
         eprintln!("{start}");
     }
+    if let Some(why) = &built.unstable {
+        eprintln!(
+            "warning: at the scene's own settings and start inputs the FMU refuses fmi2DoStep \
+             (an importer may set other solver parameters or inputs first): {why}"
+        );
+    }
     eprintln!(
         "built {} ({} variables, model identifier {}, GUID {})",
         scene.name, built.variables, built.model_identifier, built.guid

@@ -11,7 +11,7 @@ use tensegrity_fmu::partial::Partial;
 
 use tensegrity_fmu::integrator::Method;
 use tensegrity_fmu::scene::Scene;
-use tensegrity_fmu::{outputs, Simulation};
+use tensegrity_fmu::{outputs, Simulation, StepError};
 
 use super::inputs::{isclose, InputTable};
 
@@ -76,8 +76,14 @@ pub fn simulate(scene: Scene, request: Request) -> Result<(), String> {
     if let Some(start) = sim.model().start {
         eprintln!("{start}");
     }
-    if let Some(w) = sim.stability_problem() {
-        eprintln!("warning: {w}");
+    // The guard refuses the first step exactly as `stability_problem` says, unless the
+    // inputs change the stiffness first: refuse now, or warn once and point back to it.
+    let unstable = sim.stability_problem();
+    if let Some(why) = &unstable {
+        if inputs.is_none() {
+            return Err(format!("simulate refused, no CSV written: {why}"));
+        }
+        eprintln!("warning: {why}");
     }
     let path = output.unwrap_or_else(|| PathBuf::from(format!("{}.csv", scene.name)));
     let (partial, file) = Partial::create(&path)?;
@@ -85,7 +91,8 @@ pub fn simulate(scene: Scene, request: Request) -> Result<(), String> {
     let mut w = BufWriter::new(file);
     outputs::write_header(&mut w, &table).map_err(io)?;
     let mut rows = outputs::RowWriter::new(&table);
-    run(&mut sim, inputs.as_ref(), time, interval, |sim| {
+    let warned = unstable.as_deref();
+    run(&mut sim, inputs.as_ref(), time, interval, warned, |sim| {
         rows.write_row(&mut w, &table, sim).map_err(io)
     })?;
     drop(w.into_inner().map_err(|e| io(e.into_error()))?);
@@ -96,11 +103,13 @@ pub fn simulate(scene: Scene, request: Request) -> Result<(), String> {
 
 /// fmpy's co-simulation loop (`fmpy.simulation.simulateCS` with a variable communication
 /// step) from 0 to `stop`: `row` is called at 0, at every `k · interval` and at `stop`.
+/// A refusal that repeats the `warned` message says so instead of repeating it.
 fn run(
     sim: &mut Simulation,
     inputs: Option<&InputTable>,
     stop: f64,
     interval: f64,
+    warned: Option<&str>,
     mut row: impl FnMut(&Simulation) -> Result<(), String>,
 ) -> Result<(), String> {
     if let Some(table) = inputs {
@@ -126,8 +135,13 @@ fn run(
         if let Some(table) = inputs {
             table.apply(time, true, &mut sim.inputs);
         }
-        sim.advance_to(next)
-            .map_err(|e| format!("simulate stopped, no CSV written: {e}"))?;
+        sim.advance_to(next).map_err(|e| match e {
+            StepError::Unstable { message } if Some(message.as_str()) == warned => format!(
+                "simulate stopped at t = {time} s, no CSV written: the fixed step is above the \
+                 stability limit (the warning above names the cause and the fixes)"
+            ),
+            e => format!("simulate stopped, no CSV written: {e}"),
+        })?;
         time = next;
         let on_grid = isclose(time, regular);
         if on_grid {

@@ -31,6 +31,9 @@ pub struct Built {
     pub variables: usize,
     /// The equilibrium solve, when the scene starts at its equilibrium.
     pub start: Option<crate::model::StartReport>,
+    /// Why the FMU, at the scene's own settings and start inputs, refuses its first
+    /// `fmi2DoStep` (the stability guard's message), if it does.
+    pub unstable: Option<String>,
 }
 
 /// The GUID placeholder of the golden modelDescription files (the real GUID hashes the
@@ -66,6 +69,7 @@ pub fn build_fmu(scene: &Scene, binary: &Path, out: &Path) -> Result<Built, Stri
     if let Some(why) = sim.step_size_problem() {
         return Err(why);
     }
+    let unstable = sim.stability_problem();
     let table = VariableTable::new(&sim);
     let guid = guid_for(&scene_text);
     let description = model_description(sim.model(), &table, &Provenance::current(guid.clone()));
@@ -103,6 +107,7 @@ pub fn build_fmu(scene: &Scene, binary: &Path, out: &Path) -> Result<Built, Stri
         model_identifier: id,
         variables: table.variables.len(),
         start: sim.model().start,
+        unstable,
     })
 }
 

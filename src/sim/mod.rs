@@ -9,9 +9,11 @@ use crate::error::StepError;
 use crate::integrator::{Integrator, Rhs};
 use crate::model::Model;
 
+mod cause;
 mod stability;
 mod stepping;
 
+pub use cause::{Cause, Rate};
 pub use stability::stability_limit;
 
 /// The integrated state.

@@ -3,12 +3,13 @@
 //! Power iteration on the position Jacobian of the constrained acceleration (by finite
 //! differences, at rest): its largest eigenvalue magnitude is ω²_max. Velocity-dependent
 //! terms (damping, centrifugal) are left out; cables' slack/taut state is the current one.
-//! Ground contact, usually inactive when the check runs, adds a bound of its own.
+//! Ground contact, usually inactive when the check runs, adds bounds of its own. Each rate
+//! names its cause (see [`super::cause`]), so the messages can name the key to change.
 
+use super::cause::{self, Rate};
 use super::Simulation;
 use crate::dynamics;
 use crate::integrator::Method;
-use crate::model::Model;
 
 /// Smallest sensible `h ω`: below it a step resolves a millionth of the fastest mode's
 /// period/2π, round-off dominates the truncation error, and runs take millions of steps.
@@ -23,35 +24,35 @@ pub fn stability_limit(method: Method) -> Option<f64> {
     }
 }
 
-/// A bound on the fastest rate of ground contact, 1/s: the damped penalty oscillator
-/// `√(k w) + c w` or the viscous friction `μ F w / v_s`, with `w` the largest end compliance
-/// and `F` the whole weight (contact is not active at rest, so the power iteration misses it).
-pub fn contact_rate(model: &Model) -> f64 {
-    let Some(ground) = &model.ground else {
-        return 0.0;
-    };
-    let w = ground
-        .nodes
-        .iter()
-        .map(|&(_, e)| model.inertia[e / 2].w[e % 2][e % 2])
-        .fold(0.0, f64::max);
-    let weight = model.gravity.map_or(0.0, |g| {
-        g.norm()
-            * (0..model.coords.n_ends())
-                .map(|e| model.end_mass(e))
-                .sum::<f64>()
-    });
-    let oscillator = (ground.stiffness * w).sqrt() + ground.damping * w;
-    let friction = ground.friction * weight * w / ground.slip_velocity;
-    oscillator.max(friction)
-}
-
 impl Simulation {
     /// Estimated highest angular frequency of the structure at the current state, rad/s.
     pub fn max_frequency(&mut self) -> f64 {
+        self.fastest_mode().map_or(0.0, |(omega, _)| omega)
+    }
+
+    /// The fastest rates at the current state, largest first: the structure's fastest mode
+    /// (attributed to the cables or contacts that make it stiff) and the contact bounds.
+    pub fn fastest_rates(&mut self) -> Vec<Rate> {
+        let mut rates = cause::contact_rates(&self.model);
+        if let Some((omega, x)) = self.fastest_mode() {
+            let half = self.state.y.len() / 2;
+            let q0 = self.state.y[..half].to_vec();
+            let (pos, dx) = cause::node_displacements(&self.model, &mut self.ws, &q0, &x, 1e-7);
+            self.refresh();
+            let mode = cause::attribute(&self.model, &self.inputs, &pos, &dx);
+            rates.push(Rate { omega, ..mode });
+        }
+        rates.retain(|r| r.omega > 0.0);
+        rates.sort_by(|a, b| b.omega.total_cmp(&a.omega));
+        rates
+    }
+
+    /// The power iteration: ω of the fastest mode and its shape (unit length in the
+    /// reduced coordinates), or `None` without coordinates.
+    fn fastest_mode(&mut self) -> Option<(f64, Vec<f64>)> {
         let half = self.state.y.len() / 2;
         if half == 0 {
-            return 0.0;
+            return None;
         }
         let q0: Vec<f64> = self.state.y[..half].to_vec();
         let zero = vec![0.0; half];
@@ -103,7 +104,9 @@ impl Simulation {
             lambda = x.iter().map(|v| v * v).sum::<f64>().sqrt();
         }
         self.refresh();
-        lambda.sqrt()
+        let norm = lambda.max(f64::MIN_POSITIVE);
+        x.iter_mut().for_each(|v| *v /= norm);
+        Some((lambda.sqrt(), x))
     }
 
     /// The cached stability verdict, re-checked when the commanded force densities (which
@@ -130,39 +133,67 @@ impl Simulation {
     }
 
     /// `Some(message)` when `solver.step_size` is absurdly small for the structure's fastest
-    /// time scale `1/ω` (for dopri5 it is the first trial step, held to the same bound).
+    /// time scale `1/ω` (for dopri5 it is the first trial step, held to the same bound),
+    /// naming what sets that time scale.
     pub fn step_size_problem(&mut self) -> Option<String> {
         let h = self.model.solver.step_size;
-        let omega = self.max_frequency().max(contact_rate(&self.model));
+        let rates = self.fastest_rates();
+        let fastest = rates.first()?;
+        let omega = fastest.omega;
         let floor = MIN_STEP_PER_TIME_SCALE / omega;
-        (omega > 0.0 && h < floor).then(|| {
+        (h < floor).then(|| {
             format!(
                 "solver.step_size = {h:e} s is below {MIN_STEP_PER_TIME_SCALE:e} of the structure's \
-                 fastest time scale (1/ω ≈ {:.3e} s): every step would resolve nothing but \
-                 round-off and a run would take billions of steps. Use solver.step_size ≥ {floor:.3e} s \
-                 (about {:.3e} s resolves the fastest mode well with rk4)",
+                 fastest time scale (1/ω ≈ {:.3e} s, set by {}): every step would resolve nothing \
+                 but round-off and a run would take billions of steps. Use solver.step_size ≥ \
+                 {floor:.3e} s (about {:.3e} s resolves the fastest mode well with rk4)",
                 1.0 / omega,
+                fastest.describe(&self.model, &self.inputs),
                 0.1 / omega
             )
         })
     }
 
     /// `Some(message)` when the fixed step exceeds the method's stability limit for the
-    /// fastest mode, naming the limit and the fixes.
+    /// fastest rate: the limit, what sets the rate (as scene keys) and the fixes, with the
+    /// values they need.
     pub fn stability_problem(&mut self) -> Option<String> {
         let method = self.model.solver.method;
         let limit = stability_limit(method)?;
         let h = self.model.solver.step_size;
-        let omega = self.max_frequency().max(contact_rate(&self.model));
-        (h * omega > limit).then(|| {
-            format!(
-                "solver.step_size = {h} s is above the stability limit of {} for the fastest mode \
-                 (ω ≈ {omega:.3e} rad/s, limit h ≤ {:.3e} s): the run would blow up. Use \
-                 solver.method = dopri5, or solver.step_size ≤ {:.3e} s",
-                method.name(),
-                limit / omega,
-                0.9 * limit / omega
-            )
-        })
+        let rates = self.fastest_rates();
+        let fastest = rates.first()?;
+        let omega = fastest.omega;
+        if h * omega <= limit {
+            return None;
+        }
+        // The fixes aim 10 % inside the limit.
+        let target = 0.9 * limit / h;
+        let mut keys = Vec::new();
+        let mut unfixed: f64 = 0.0;
+        for rate in rates.iter().filter(|r| r.omega > target) {
+            match rate.fix(&self.model, &self.inputs, target) {
+                Some(fix) => keys.push(fix),
+                None => unfixed = unfixed.max(rate.omega),
+            }
+        }
+        let mut fixes = vec![format!("solver.step_size ≤ {:.3e} s", 0.9 * limit / omega)];
+        if !keys.is_empty() {
+            let mut fix = keys.join(" and ");
+            if unfixed > 0.0 {
+                fix += &format!(" with solver.step_size ≤ {:.3e} s", 0.9 * limit / unfixed);
+            }
+            fixes.push(fix);
+        }
+        fixes.push("solver.method = \"dopri5\" (adaptive steps)".into());
+        Some(format!(
+            "solver.step_size = {h} s is above {}'s stability limit for this scene, h ≤ {:.3e} s \
+             (h ω ≤ {limit:.3}), so the run would blow up: its fastest rate, ω ≈ {omega:.3e} 1/s, \
+             comes from {}. Fixes: {}",
+            method.name(),
+            limit / omega,
+            fastest.describe(&self.model, &self.inputs),
+            fixes.join(", or ")
+        ))
     }
 }
