@@ -133,7 +133,8 @@ fn energy_error_per_block(method: Method) -> Vec<f64> {
 #[test]
 fn rattle_keeps_energy_bounded_over_1000_s() {
     let mut growth = Vec::new();
-    for method in Method::ALL {
+    // The explicit methods and rattle (sdirk3 is for stiff runs; it damps, see tests/stiff.rs).
+    for method in [Method::Rk4, Method::Dopri5, Method::Rattle] {
         let blocks = energy_error_per_block(method);
         let shown: Vec<String> = blocks.iter().map(|e| format!("{e:.1e}")).collect();
         println!(

@@ -1,5 +1,5 @@
 //! Analyses of a structure about a state at rest, built on the tangent of the equations
-//! of motion ([`tangent`]): the static equilibrium a scene can start from
+//! of motion ([`crate::dynamics::tangent`]): the static equilibrium a scene can start from
 //! ([`equilibrium`]), natural frequencies and mode shapes ([`modes`]) and continuous-time
 //! state-space models ([`linear`]).
 //!
@@ -12,8 +12,8 @@ pub mod export;
 pub mod linear;
 pub mod modes;
 mod reduced;
-pub mod tangent;
 
+pub use crate::dynamics::tangent;
 pub use equilibrium::{settle, Settled};
 pub use reduced::Reduced;
 pub use tangent::{InputChannel, Tangent};

@@ -48,7 +48,7 @@ enum Command {
         /// Turn the constraint correction off.
         #[arg(long)]
         no_correction: bool,
-        /// Integration method: rk4, dopri5 or rattle (default: the scene's solver.method).
+        /// Integration method: rk4, dopri5, rattle or sdirk3 (default: the scene's solver.method).
         #[arg(long)]
         method: Option<String>,
         /// Relative tolerance of dopri5 (default: the scene's solver.rtol).
@@ -179,7 +179,7 @@ pub fn run(cli: Cli) -> Result<(), String> {
             let solver = &mut scene.solver;
             if let Some(m) = method {
                 solver.method = Method::from_name(&m).ok_or_else(|| {
-                    format!("--method {m}: unknown method (rk4, dopri5 or rattle)")
+                    format!("--method {m}: unknown method (rk4, dopri5, rattle or sdirk3)")
                 })?;
             }
             solver.step_size = step_size.unwrap_or(solver.step_size);

@@ -9,6 +9,7 @@
 pub mod effects;
 pub mod energy;
 pub mod supports;
+pub mod tangent;
 
 use nalgebra::Vector3;
 

@@ -177,7 +177,7 @@ impl Instance {
                 Binding::NodeForce(k, axis) => next.inputs.node_force[k][axis] = value,
                 Binding::Method if Method::from_fmi_value(value).is_none() => {
                     return Err(FmiError::refused(format!(
-                        "{call}: {name} = {value} is not a method (1 = rk4, 2 = dopri5, 3 = rattle)"
+                        "{call}: {name} = {value} is not a method (1 = rk4, 2 = dopri5, 3 = rattle, 4 = sdirk3)"
                     )));
                 }
                 _ => {

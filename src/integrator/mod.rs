@@ -5,11 +5,14 @@
 mod dopri5;
 mod rattle;
 mod rk4;
+mod sdirk;
 
 pub use dopri5::Dopri5;
 pub use rattle::Rattle;
 pub use rk4::Rk4;
+pub use sdirk::Sdirk3;
 
+use nalgebra::DMatrix;
 use serde::{Deserialize, Serialize};
 
 /// A right-hand side `f(t, y)`, with `y = [q; v]`.
@@ -20,6 +23,11 @@ pub trait Rhs {
     /// of `before` (the start of the step), adding the displacement to `moved`; a no-op
     /// when the correction is off.
     fn project_positions(&mut self, _y: &mut [f64], _before: &[f64], _moved: &mut [f64]) {}
+    /// `∂a/∂q` and `∂a/∂v` of the accelerations (the second half of `f`) at `(t, y)`, each
+    /// `n/2 × n/2`, for implicit methods; `None` where there is no tangent.
+    fn jacobian(&mut self, _t: f64, _y: &[f64]) -> Option<(DMatrix<f64>, DMatrix<f64>)> {
+        None
+    }
 }
 
 /// What an attempted step did.
@@ -78,11 +86,14 @@ pub enum Method {
     /// Fixed-step second-order velocity Verlet with the exact position projection inside
     /// the step (RATTLE-type, 1 evaluation per step).
     Rattle,
+    /// Fixed-step, L-stable, third-order singly diagonally implicit Runge–Kutta with
+    /// Newton iterations on the exact tangent (for stiff cables at controller-rate steps).
+    Sdirk3,
 }
 
 impl Method {
-    /// Every method, in FMU enumeration order (values 1, 2, 3).
-    pub const ALL: [Method; 3] = [Method::Rk4, Method::Dopri5, Method::Rattle];
+    /// Every method, in FMU enumeration order (values 1, 2, 3, 4).
+    pub const ALL: [Method; 4] = [Method::Rk4, Method::Dopri5, Method::Rattle, Method::Sdirk3];
 
     /// The name used in scenes, on the command line and in reports.
     pub fn name(self) -> &'static str {
@@ -90,6 +101,7 @@ impl Method {
             Self::Rk4 => "rk4",
             Self::Dopri5 => "dopri5",
             Self::Rattle => "rattle",
+            Self::Sdirk3 => "sdirk3",
         }
     }
 
@@ -99,10 +111,11 @@ impl Method {
             Self::Rk4 => "classical fixed-step 4th-order Runge-Kutta, 4 evaluations per step",
             Self::Dopri5 => "adaptive Dormand-Prince 5(4) controlled by solver.rtol and solver.atol; solver.step_size is the first trial step",
             Self::Rattle => "fixed-step 2nd-order velocity Verlet with the exact position projection inside the step (RATTLE-type), 1 evaluation per step",
+            Self::Sdirk3 => "fixed-step, L-stable 3rd-order implicit SDIRK (Alexander) with Newton iterations on the exact tangent: stable at any step, damps modes faster than the step resolves; a dense Jacobian per step",
         }
     }
 
-    /// Its value in the FMU's `SolverMethod` enumeration (1, 2, 3).
+    /// Its value in the FMU's `SolverMethod` enumeration (1, 2, 3, 4).
     pub fn fmi_value(self) -> i32 {
         Self::ALL
             .iter()
@@ -129,6 +142,7 @@ impl Method {
             Self::Rk4 => Box::new(Rk4::new(n)),
             Self::Dopri5 => Box::new(Dopri5::new(n, rtol, atol)),
             Self::Rattle => Box::new(Rattle::new(n)),
+            Self::Sdirk3 => Box::new(Sdirk3::new(n)),
         }
     }
 }

@@ -191,7 +191,7 @@ pub struct Report {
 pub fn setting_label(method: Method, setting: f64) -> String {
     match method {
         Method::Dopri5 => format!("tol = {setting:.0e}"),
-        Method::Rk4 | Method::Rattle => format!("h = {} ms", setting * 1e3),
+        Method::Rk4 | Method::Rattle | Method::Sdirk3 => format!("h = {} ms", setting * 1e3),
     }
 }
 

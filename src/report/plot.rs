@@ -42,6 +42,7 @@ fn colour(method: Method) -> RGBColor {
         Method::Rk4 => RGBColor(31, 119, 180),
         Method::Rattle => RGBColor(214, 39, 40),
         Method::Dopri5 => RGBColor(44, 160, 44),
+        Method::Sdirk3 => RGBColor(148, 103, 189),
     }
 }
 
@@ -216,7 +217,7 @@ where
 fn setting_kind(method: Method) -> &'static str {
     match method {
         Method::Dopri5 => "adaptive, labels: rtol = atol",
-        Method::Rk4 | Method::Rattle => "fixed step, labels: step",
+        Method::Rk4 | Method::Rattle | Method::Sdirk3 => "fixed step, labels: step",
     }
 }
 
@@ -224,7 +225,7 @@ fn setting_kind(method: Method) -> &'static str {
 fn short_setting(r: &RunRecord) -> String {
     match r.method {
         Method::Dopri5 => format!("{:.0e}", r.setting),
-        Method::Rk4 | Method::Rattle => format!("{} ms", r.setting * 1e3),
+        Method::Rk4 | Method::Rattle | Method::Sdirk3 => format!("{} ms", r.setting * 1e3),
     }
 }
 

@@ -76,7 +76,7 @@ pub(crate) fn simulate(
             model.solver.atol = setting;
             None
         }
-        Method::Rk4 | Method::Rattle => {
+        Method::Rk4 | Method::Rattle | Method::Sdirk3 => {
             model.solver.step_size = setting;
             Some(setting)
         }

@@ -2,8 +2,9 @@
 //! the integrator. One step is: integrate → correct positions → correct velocities →
 //! check finiteness (restoring the last good state on failure).
 
-use nalgebra::Vector3;
+use nalgebra::{DMatrix, Vector3};
 
+use crate::dynamics::tangent::Tangent;
 use crate::dynamics::{self, energy, Inputs, Workspace};
 use crate::error::StepError;
 use crate::integrator::{Integrator, Rhs};
@@ -104,6 +105,11 @@ impl Rhs for System<'_> {
         let (dq, dv) = dy.split_at_mut(half);
         dq.copy_from_slice(v);
         dynamics::accelerations(self.model, self.inputs, t, q, v, self.ws, dv);
+    }
+
+    fn jacobian(&mut self, t: f64, y: &[f64]) -> Option<(DMatrix<f64>, DMatrix<f64>)> {
+        let (q, v) = y.split_at(y.len() / 2);
+        Some(Tangent::new(self.model, self.inputs, t, q, v).acceleration_jacobian(v))
     }
 
     fn project_positions(&mut self, y: &mut [f64], before: &[f64], moved: &mut [f64]) {

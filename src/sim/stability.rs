@@ -20,7 +20,7 @@ pub fn stability_limit(method: Method) -> Option<f64> {
     match method {
         Method::Rk4 => Some(2.0 * 2f64.sqrt()),
         Method::Rattle => Some(2.0),
-        Method::Dopri5 => None,
+        Method::Dopri5 | Method::Sdirk3 => None,
     }
 }
 

@@ -154,7 +154,7 @@ def test_builtin_parameter_starts_match_scene(builtin):
     solver = scene.get("solver", {})
     assert float(v["solver.step_size"].start) == solver.get("step_size", 0.001)
     assert v["solver.correction"].start == str(solver.get("correction", True)).lower()
-    methods = {"rk4": 1, "dopri5": 2, "rattle": 3}
+    methods = {"rk4": 1, "dopri5": 2, "rattle": 3, "sdirk3": 4}
     assert v["solver.method"].type == "Integer"
     assert int(v["solver.method"].start) == methods[solver.get("method", "rk4")]
     assert float(v["solver.rtol"].start) == solver.get("rtol", 1e-6)
@@ -365,8 +365,8 @@ def test_solver_method_and_max_steps_are_integer_parameters(builtin, open_fmu):
     v = builtin.variables
     method, steps = v["solver.method"], v["solver.max_steps"]
     assert (method.type, method.causality, method.variability) == ("Integer", "parameter", "fixed")
-    assert (int(method.min), int(method.max)) == (1, 3)
-    assert "1 = rk4" in method.description and "3 = rattle" in method.description
+    assert (int(method.min), int(method.max)) == (1, 4)
+    assert "1 = rk4" in method.description and "4 = sdirk3" in method.description
     assert (steps.type, steps.causality, steps.variability) == ("Integer", "parameter", "tunable")
     assert int(steps.start) == builtin.scene.get("solver", {}).get("max_steps", 100000)
     assert int(steps.min) == 1

@@ -55,7 +55,7 @@ pub(super) fn parameters(model: &Model, vars: &mut Vec<Variable>) {
     vars.push(parameter(
         "solver.method".into(),
         None,
-        "integration method: 1 = rk4, 2 = dopri5 (adaptive), 3 = rattle".into(),
+        "integration method: 1 = rk4, 2 = dopri5 (adaptive), 3 = rattle, 4 = sdirk3 (implicit, for stiff cables)".into(),
         f64::from(method.fmi_value()),
         Binding::Method,
     ));

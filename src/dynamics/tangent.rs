@@ -10,8 +10,8 @@
 
 use nalgebra::{DMatrix, DVector, Matrix3, Vector3};
 
-use crate::dynamics::effects::{CableLink, ForceEffect};
-use crate::dynamics::{self, Inputs, Workspace};
+use super::effects::{self, CableLink, ForceEffect};
+use super::{Inputs, Workspace};
 use crate::model::Model;
 
 /// One input of the structure (the FMU's inputs, in model numbering).
@@ -55,7 +55,7 @@ impl Tangent {
     pub fn new(model: &Model, inputs: &Inputs, t: f64, q: &[f64], v: &[f64]) -> Self {
         let mut ws = Workspace::new(model);
         let mut acc = vec![0.0; q.len()];
-        dynamics::accelerations(model, inputs, t, q, v, &mut ws, &mut acc);
+        super::accelerations(model, inputs, t, q, v, &mut ws, &mut acc);
         let ends = end_jacobian(model);
         let n_ends = model.coords.n_ends();
         let mut end_mass = DMatrix::zeros(3 * n_ends, 3 * n_ends);
@@ -128,6 +128,45 @@ impl Tangent {
     pub fn tangent_stiffness(&self) -> DMatrix<f64> {
         let k = -(&self.stiffness + &self.geometric);
         (&k + k.transpose()) * 0.5
+    }
+
+    /// `∂η̈₂/∂q` and `∂η̈₂/∂q̇` of the constrained accelerations at this state (`v` its
+    /// velocities), on or off the constraint manifold. From `M̄ η̈₂ = f + Gᵀμ` and
+    /// `G η̈₂ + c = 0` (`cᵢ = q̇ᵀ Hᵢ q̇`, `Hᵢ = 2 DᵢᵀDᵢ` constant), with `S = G M̄⁻¹ Gᵀ` and
+    /// `P = I − M̄⁻¹ Gᵀ S⁻¹ G`:
+    /// `J_q = P M̄⁻¹ (∂f/∂q + Σ λᵢ DᵢᵀDᵢ) − M̄⁻¹ Gᵀ S⁻¹ Q` with `Qᵢ = η̈₂ᵀ Hᵢ`, and
+    /// `J_v = P M̄⁻¹ ∂f/∂q̇ − M̄⁻¹ Gᵀ S⁻¹ R` with `Rᵢ = 2 q̇ᵀ Hᵢ`.
+    pub fn acceleration_jacobian(&self, v: &[f64]) -> (DMatrix<f64>, DMatrix<f64>) {
+        let n = self.mass.nrows();
+        let mass_inv = self
+            .mass
+            .clone()
+            .cholesky()
+            .expect("the mass matrix is positive definite")
+            .inverse();
+        let g = &self.constraints;
+        let minv_gt = &mass_inv * g.transpose();
+        let s = g * &minv_gt;
+        let tolerance = 1e-14 * s.amax().max(f64::MIN_POSITIVE);
+        let s_inv = s.pseudo_inverse(tolerance).expect("tolerance ≥ 0");
+        // −M̄⁻¹ Gᵀ S⁻¹, shared by both Jacobians.
+        let back = -(&minv_gt * &s_inv);
+        let projector = DMatrix::identity(n, n) + &back * g;
+        let v = DVector::from_column_slice(v);
+        let mut q_rows = DMatrix::zeros(g.nrows(), n);
+        let mut r_rows = DMatrix::zeros(g.nrows(), n);
+        for (r, &bar) in self.constraint_bars.iter().enumerate() {
+            let d = self.ends.rows(6 * bar + 3, 3) - self.ends.rows(6 * bar, 3);
+            q_rows
+                .row_mut(r)
+                .copy_from(&((&d * &self.acceleration).transpose() * &d * 2.0));
+            r_rows
+                .row_mut(r)
+                .copy_from(&((&d * &v).transpose() * &d * 4.0));
+        }
+        let jq = &projector * &mass_inv * (&self.stiffness + &self.geometric) + &back * q_rows;
+        let jv = &projector * &mass_inv * &self.damping + &back * r_rows;
+        (jq, jv)
     }
 
     /// `∂f/∂u` for each channel (3r × channels).
@@ -290,7 +329,7 @@ impl EndDerivatives {
 
 /// `γ` of an elastic law while taut and positive, else 0 (as the step computes it).
 fn density(stiffness: f64, rest: f64, c: f64, s: &Vector3<f64>, s_dot: &Vector3<f64>) -> f64 {
-    dynamics::effects::damped_density(stiffness, rest, c, s, s_dot)
+    effects::damped_density(stiffness, rest, c, s, s_dot)
 }
 
 fn cable_vector(link: &CableLink, ws: &Workspace) -> Vector3<f64> {
