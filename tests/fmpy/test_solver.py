@@ -50,5 +50,5 @@ def test_invalid_method_value_is_an_error(open_fmu, fmus):
     s.fmu.setupExperiment(startTime=0.0)
     s.fmu.enterInitializationMode()
     with pytest.raises(FMICallException):
-        s.fmu.setInteger(s.vrs(["solver.method"]), [4])
+        s.fmu.setInteger(s.vrs(["solver.method"]), [5])
     assert any("solver.method" in m for m in s.errors())
