@@ -42,6 +42,12 @@ pub struct Sdirk3 {
     stage: Vec<f64>,
     dy: Vec<f64>,
     residual: DVector<f64>,
+    /// The factored iteration matrix and the step it was made for, kept across steps
+    /// while Newton still converges with it (simplified Newton).
+    factored: Option<(f64, LU<f64, Dyn, Dyn>)>,
+    /// Where that matrix was taken: step, time and state (for FMU state snapshots, which
+    /// rebuild it there so that a restored run is bit-identical).
+    taken_at: Option<(f64, f64, Vec<f64>)>,
     evaluations: u64,
     factorizations: u64,
 }
@@ -67,6 +73,8 @@ impl Sdirk3 {
             stage: vec![0.0; n],
             dy: vec![0.0; n],
             residual: DVector::zeros(m),
+            factored: None,
+            taken_at: None,
             evaluations: 0,
             factorizations: 0,
         }
@@ -82,13 +90,22 @@ impl Sdirk3 {
     #[allow(clippy::needless_range_loop)]
     fn try_step(&mut self, rhs: &mut dyn Rhs, t: f64, y: &mut [f64], h: f64) -> bool {
         let m = self.m;
-        let Some((jq, jv)) = rhs.jacobian(t, y) else {
-            return false;
-        };
         let hg = h * GAMMA;
-        let w = DMatrix::identity(m, m) - &jv * hg - &jq * (hg * hg);
-        self.factorizations += 1;
-        let lu: LU<f64, Dyn, Dyn> = w.lu();
+        if self.factored.as_ref().is_none_or(|(step, _)| *step != h) {
+            // A restored snapshot names the state its matrix was taken at.
+            let (t_j, y_j) = match self.taken_at.take() {
+                Some((step, t_j, y_j)) if step == h && self.factored.is_none() => (t_j, y_j),
+                _ => (t, y.to_vec()),
+            };
+            let Some((jq, jv)) = rhs.jacobian(t_j, &y_j) else {
+                return false;
+            };
+            self.taken_at = Some((h, t_j, y_j));
+            let w = DMatrix::identity(m, m) - &jv * hg - &jq * (hg * hg);
+            self.factorizations += 1;
+            self.factored = Some((h, w.lu()));
+        }
+        let lu = &self.factored.as_ref().expect("factored above").1;
         let (a, c) = tableau();
         for i in 0..3 {
             // base = y₀ + h Σ_{j<i} a_ij K_j, with K_j = (V_j, A_j).
@@ -156,6 +173,13 @@ impl Sdirk3 {
             return true;
         }
         y.copy_from_slice(&start);
+        // A matrix from an earlier state may be too stale: retry with a fresh one.
+        self.factored = None;
+        self.taken_at = None;
+        if self.try_step(rhs, t, y, h) {
+            return true;
+        }
+        y.copy_from_slice(&start);
         if splits == MAX_SPLITS {
             return false;
         }
@@ -176,6 +200,28 @@ impl Integrator for Sdirk3 {
 
     fn adaptive(&self) -> bool {
         false
+    }
+
+    fn invalidate(&mut self) {
+        self.factored = None;
+        self.taken_at = None;
+    }
+
+    fn carried(&self) -> Vec<f64> {
+        match (&self.factored, &self.taken_at) {
+            (Some(_), Some((h, t, y))) => [*h, *t].into_iter().chain(y.iter().copied()).collect(),
+            _ => Vec::new(),
+        }
+    }
+
+    fn restore_carried(&mut self, values: &[f64]) {
+        self.factored = None;
+        self.taken_at =
+            (values.len() == 2 + 2 * self.m).then(|| (values[0], values[1], values[2..].to_vec()));
+    }
+
+    fn after_correction(&mut self) {
+        // The iteration matrix only steers Newton: a corrected state does not stale it.
     }
 
     fn name(&self) -> &'static str {

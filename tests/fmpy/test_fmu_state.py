@@ -231,10 +231,11 @@ def test_every_flipped_bit_past_the_header_is_rejected(fmus, open_fmu, prism2_bl
     )
 
 
-@pytest.mark.parametrize("method,h", [(2, 0.05), (3, 0.001)])  # dopri5, rattle
+@pytest.mark.parametrize("method,h", [(2, 0.05), (3, 0.001), (4, 0.001)])  # dopri5, rattle, sdirk3
 def test_state_resumes_bit_identically_for_every_method(elastic, open_fmu, method, h):
     """Methods that carry values between steps (dopri5's step size and last stage, rattle's
-    acceleration) must resume exactly after set and after serialize/deserialize."""
+    acceleration, sdirk3's iteration matrix, rebuilt where it was taken) must resume exactly
+    after set and after serialize/deserialize."""
 
     def start(name):
         s = open_fmu(elastic, name=name)
