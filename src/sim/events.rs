@@ -21,9 +21,10 @@ use crate::model::Model;
 pub const MAX_SPLITS: u32 = 8;
 
 /// Crossings closer than this fraction of the step to either end are not split off: the
-/// kink there costs far less than round-off elsewhere, and a crossing just located lies
-/// this close to the start of the next part.
-const EDGE: f64 = 1e-7;
+/// kink there costs little (its error grows with the square of that distance), a crossing
+/// just located lies this close to the start of the next part, and a node grazing the
+/// ground would otherwise be chased into ever shorter steps.
+const EDGE: f64 = 1e-3;
 
 /// The crossing is located to this fraction of the step.
 const TOLERANCE: f64 = 1e-12;

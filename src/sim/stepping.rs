@@ -140,26 +140,23 @@ impl Simulation {
                 self.events.start(&self.model, &self.inputs, &self.state.y);
             }
             match self.attempt(t, h)? {
-                Outcome::Accepted { next } if locate => {
-                    if let Some(theta) =
-                        self.events
-                            .locate(&self.model, &self.inputs, &self.state.y, h)
-                    {
-                        // Redo the step, clipped to end just past the switch.
-                        self.discard_trial();
-                        self.stats.events += 1;
-                        resume = Some(resume.map_or(next, |r| r.max(next)));
-                        self.h_next = theta;
-                        continue;
-                    }
-                    accepted += 1;
-                    self.state.time = if last { t_end } else { t + h };
-                    let next = resume.take().map_or(next, |r| r.max(next));
-                    if !last || next < self.h_next {
-                        self.h_next = next;
-                    }
-                }
                 Outcome::Accepted { next } => {
+                    // A step clipped at an event is not checked again: its end lies just
+                    // past the switch, and a second look could only clip it ever shorter.
+                    if locate && resume.is_none() {
+                        if let Some(theta) =
+                            self.events
+                                .locate(&self.model, &self.inputs, &self.state.y, h)
+                        {
+                            // Redo the step, clipped to end just past the switch.
+                            self.discard_trial();
+                            self.stats.events += 1;
+                            resume = Some(next);
+                            self.h_next = theta;
+                            continue;
+                        }
+                    }
+                    let next = resume.take().map_or(next, |r| r.max(next));
                     accepted += 1;
                     self.state.time = if last { t_end } else { t + h };
                     // A step clipped to the target says nothing about the natural step.
