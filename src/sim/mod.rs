@@ -11,6 +11,7 @@ use crate::integrator::{Integrator, Rhs};
 use crate::model::Model;
 
 mod cause;
+mod events;
 mod stability;
 mod stepping;
 
@@ -40,8 +41,12 @@ struct Stability {
 pub struct Stats {
     /// Accepted steps.
     pub steps: u64,
-    /// Rejected steps (adaptive methods).
+    /// Rejected steps: by the adaptive method's error control, or trial steps redone in
+    /// parts because a force law switched inside them.
     pub rejected: u64,
+    /// Located events: switches of a force law (a cable going slack or taut, a contact
+    /// point touching or leaving the ground) at which a step was split.
+    pub events: u64,
 }
 
 /// Model + state + inputs + workspace + integrator.
@@ -64,6 +69,9 @@ pub struct Simulation {
     pub correction: bool,
     /// Refuse fixed steps above the explicit method's stability limit (on by default).
     pub guard_stability: bool,
+    /// Split steps where a force law switches (on by default; see `events`).
+    pub locate_events: bool,
+    events: events::Events,
     stability: Stability,
     warnings: Vec<String>,
 }
@@ -84,6 +92,8 @@ impl Clone for Simulation {
             integrator: self.integrator.boxed_clone(),
             correction: self.correction,
             guard_stability: self.guard_stability,
+            locate_events: self.locate_events,
+            events: self.events.clone(),
             stability: self.stability.clone(),
             warnings: self.warnings.clone(),
         }
@@ -141,6 +151,8 @@ impl Simulation {
             stepped_inputs: Inputs::start(&model),
             correction: model.solver.correction,
             guard_stability: true,
+            locate_events: true,
+            events: events::Events::new(&model),
             stability: Stability::default(),
             advance_start: State {
                 time: 0.0,

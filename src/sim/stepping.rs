@@ -2,7 +2,7 @@
 //! each accepted step followed by the exact correction and a finiteness check. A failed
 //! advance leaves the state where it began.
 
-use super::{Simulation, System};
+use super::{events, Simulation, System};
 use crate::correction::bar_vector;
 use crate::error::StepError;
 use crate::integrator::Outcome;
@@ -41,7 +41,7 @@ impl Simulation {
         self.check_step_stability()?;
         self.note_input_changes();
         self.last_good.copy_from_slice(&self.state.y);
-        self.attempt(t, h)?;
+        self.attempt_located(t, h)?;
         self.state.time = t_next;
         Ok(())
     }
@@ -101,7 +101,7 @@ impl Simulation {
                 rest
             };
             self.last_good.copy_from_slice(&self.state.y);
-            self.attempt(t0, h)?;
+            self.attempt_located(t0, h)?;
             self.state.time = t1;
         }
         Ok(n)
@@ -111,6 +111,9 @@ impl Simulation {
         let mut accepted = 0;
         let mut attempts = 0;
         let max = self.model.solver.max_steps;
+        let locate = self.locate_events && !self.events.is_empty();
+        // The natural next step while a step is clipped at a located event.
+        let mut resume: Option<f64> = None;
         loop {
             let t = self.state.time;
             let rest = t_end - t;
@@ -133,8 +136,27 @@ impl Simulation {
             }
             attempts += 1;
             self.last_good.copy_from_slice(&self.state.y);
+            if locate {
+                self.events.start(&self.model, &self.inputs, &self.state.y);
+            }
             match self.attempt(t, h)? {
                 Outcome::Accepted { next } => {
+                    // A step clipped at an event is not checked again: its end lies just
+                    // past the switch, and a second look could only clip it ever shorter.
+                    if locate && resume.is_none() {
+                        if let Some(theta) =
+                            self.events
+                                .locate(&self.model, &self.inputs, &self.state.y, h)
+                        {
+                            // Redo the step, clipped to end just past the switch.
+                            self.discard_trial();
+                            self.stats.events += 1;
+                            resume = Some(next);
+                            self.h_next = theta;
+                            continue;
+                        }
+                    }
+                    let next = resume.take().map_or(next, |r| r.max(next));
                     accepted += 1;
                     self.state.time = if last { t_end } else { t + h };
                     // A step clipped to the target says nothing about the natural step.
@@ -148,6 +170,46 @@ impl Simulation {
                 }
             }
         }
+    }
+
+    /// A fixed step of `h` from `t`, split where a force law switches inside it: after a
+    /// trial step the earliest switch is located, the trial is discarded and the step is
+    /// redone up to the switch, then over the rest (which is checked again, up to
+    /// [`events::MAX_SPLITS`] times). Each part is a full step of the method followed by
+    /// the correction, so a part starts, like any step, from a corrected state.
+    fn attempt_located(&mut self, t: f64, h: f64) -> Result<(), StepError> {
+        if !self.locate_events || self.events.is_empty() {
+            return self.attempt(t, h).map(|_| ());
+        }
+        let end = t + h;
+        let (mut t0, mut rest) = (t, h);
+        for split in 0..=events::MAX_SPLITS {
+            self.events.start(&self.model, &self.inputs, &self.state.y);
+            self.attempt(t0, rest)?;
+            if split == events::MAX_SPLITS {
+                break;
+            }
+            let Some(theta) = self
+                .events
+                .locate(&self.model, &self.inputs, &self.state.y, rest)
+            else {
+                break;
+            };
+            self.discard_trial();
+            self.attempt(t0, theta)?;
+            self.stats.events += 1;
+            t0 += theta;
+            rest = end - t0;
+        }
+        Ok(())
+    }
+
+    /// Goes back to the start of a trial step that crossed a switch.
+    fn discard_trial(&mut self) {
+        self.state.y.copy_from_slice(&self.events.y0);
+        self.integrator.invalidate();
+        self.stats.steps -= 1;
+        self.stats.rejected += 1;
     }
 
     /// One attempt from `t` with step `h`, then the correction and the finiteness check.

@@ -1,0 +1,270 @@
+//! Kinks located: the force laws switch where a cable goes slack or taut (`|s| = s₀`) and
+//! where a contact point touches or leaves the ground (`n·x = h`). There the force is
+//! continuous but its derivative jumps, and a step across such a point loses the method's
+//! order. After a trial step the switching functions are compared at both ends; if one
+//! changed sign, the earliest crossing is found by the Illinois method on a cubic Hermite
+//! interpolant of the bar ends from `(q₀, q̇₀, q₁, q̇₁)` (O(h⁴), to 1e-12 of the step), and
+//! the caller redoes the step in two parts, split at the crossing.
+//!
+//! Not located (documented limits): a switch crossed twice inside one step (no sign change
+//! at its ends), the clamp `max(0, ·)` of cable and contact damping, and the friction law's
+//! change at the slip velocity. The switching functions depend only on the state and the
+//! inputs held over the step, so the split is deterministic.
+
+use nalgebra::Vector3;
+
+use crate::dynamics::Inputs;
+use crate::model::effects::{CableLink, ForceEffect};
+use crate::model::Model;
+
+/// Most events split off one step; the rest of the step is then taken whole.
+pub const MAX_SPLITS: u32 = 8;
+
+/// Crossings closer than this fraction of the step to either end are not split off: the
+/// kink there costs little (its error grows with the square of that distance), a crossing
+/// just located lies this close to the start of the next part, and a node grazing the
+/// ground would otherwise be chased into ever shorter steps.
+const EDGE: f64 = 1e-3;
+
+/// The crossing is located to this fraction of the step.
+const TOLERANCE: f64 = 1e-12;
+
+/// Most Illinois iterations per crossing.
+const MAX_ITERATIONS: usize = 100;
+
+/// A point a switching function watches.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Point {
+    /// A bar end (index into the model's ends).
+    End(usize),
+    /// A fixed (pinned, bar-less) node, m.
+    Fixed(Vector3<f64>),
+}
+
+/// A cable's rest length.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Rest {
+    Fixed(f64),
+    /// Index into [`Inputs::rest_length`].
+    Input(usize),
+}
+
+/// One switching function; its sign tells which branch of the force law is active.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Switch {
+    /// `|x_b − x_a| − s₀`: positive while taut.
+    Cable { a: Point, b: Point, rest: Rest },
+    /// `n·x − h`: negative while in contact.
+    Ground {
+        end: usize,
+        normal: Vector3<f64>,
+        height: f64,
+    },
+}
+
+/// The switching functions of a model and the buffers to locate their crossings, sized
+/// once.
+#[derive(Debug, Clone)]
+pub struct Events {
+    switches: Vec<Switch>,
+    /// The state at the start of the current (part of a) step.
+    pub y0: Vec<f64>,
+    /// Switching functions at `y0`.
+    g0: Vec<f64>,
+    /// Bar-end positions and velocities at both ends of the step.
+    x0: Vec<Vector3<f64>>,
+    v0: Vec<Vector3<f64>>,
+    x1: Vec<Vector3<f64>>,
+    v1: Vec<Vector3<f64>>,
+}
+
+impl Events {
+    /// The switching functions of the effects `model` declares.
+    pub fn new(model: &Model) -> Self {
+        let point = |link: &CableLink, i: usize| match link.ends[i] {
+            Some(e) => Point::End(e),
+            None => Point::Fixed(model.positions[link.nodes[i]]),
+        };
+        let cable = |link: &CableLink, rest: Rest| Switch::Cable {
+            a: point(link, 0),
+            b: point(link, 1),
+            rest,
+        };
+        let mut switches = Vec::new();
+        for effect in &model.pipeline.forces {
+            match effect {
+                ForceEffect::ElasticCables(cables) => {
+                    for (link, _, rest) in cables {
+                        switches.push(cable(link, Rest::Fixed(*rest)));
+                    }
+                }
+                ForceEffect::DampedCables(cables) => {
+                    for (link, _, rest, _) in cables {
+                        switches.push(cable(link, Rest::Fixed(*rest)));
+                    }
+                }
+                ForceEffect::ReeledCables(cables) => {
+                    for (link, _, _, input) in cables {
+                        switches.push(cable(link, Rest::Input(*input)));
+                    }
+                }
+                ForceEffect::GroundContact(ground) => {
+                    for &(_, end) in &ground.nodes {
+                        switches.push(Switch::Ground {
+                            end,
+                            normal: ground.normal,
+                            height: ground.height,
+                        });
+                    }
+                }
+                ForceEffect::ForceDensityCables(_)
+                | ForceEffect::NodeForces(_)
+                | ForceEffect::ScriptedLoads(_)
+                | ForceEffect::Gravity(_) => {}
+            }
+        }
+        let n = model.state_len();
+        let ends = model.coords.n_ends();
+        Self {
+            g0: vec![0.0; switches.len()],
+            switches,
+            y0: vec![0.0; n],
+            x0: vec![Vector3::zeros(); ends],
+            v0: vec![Vector3::zeros(); ends],
+            x1: vec![Vector3::zeros(); ends],
+            v1: vec![Vector3::zeros(); ends],
+        }
+    }
+
+    /// True when the model has no switching function (nothing to locate).
+    pub fn is_empty(&self) -> bool {
+        self.switches.is_empty()
+    }
+
+    /// Notes the state a step starts from: copies it and evaluates the switches there.
+    pub fn start(&mut self, model: &Model, inputs: &Inputs, y: &[f64]) {
+        self.y0.copy_from_slice(y);
+        ends(model, y, &mut self.x0, &mut self.v0);
+        for (g, s) in self.g0.iter_mut().zip(&self.switches) {
+            *g = value(s, inputs, &self.x0);
+        }
+    }
+
+    /// After a step of `h` from the noted start to `y`: the time from the start of the
+    /// earliest sign change of a switching function that lies inside the step (not
+    /// within [`EDGE`] of either end), if any. The time returned is just past the crossing.
+    pub fn locate(&mut self, model: &Model, inputs: &Inputs, y: &[f64], h: f64) -> Option<f64> {
+        ends(model, y, &mut self.x1, &mut self.v1);
+        let (lo, hi) = (EDGE * h, (1.0 - EDGE) * h);
+        let mut earliest: Option<f64> = None;
+        for (j, s) in self.switches.iter().enumerate() {
+            let g0 = self.g0[j];
+            let g1 = value(s, inputs, &self.x1);
+            if (g0 > 0.0) == (g1 > 0.0) {
+                continue;
+            }
+            let theta = self.crossing(s, inputs, g0, g1, h);
+            if theta > lo && theta < hi && earliest.is_none_or(|e| theta < e) {
+                earliest = Some(theta);
+            }
+        }
+        earliest
+    }
+
+    /// Illinois (modified regula falsi) on the switch along the Hermite interpolant; the
+    /// end of the final bracket on the far side of the crossing.
+    fn crossing(&self, s: &Switch, inputs: &Inputs, g0: f64, g1: f64, h: f64) -> f64 {
+        let (mut a, mut fa) = (0.0, g0);
+        let (mut b, mut fb) = (h, g1);
+        let after = g1 > 0.0;
+        let mut side = 0i8;
+        for _ in 0..MAX_ITERATIONS {
+            if b - a <= TOLERANCE * h {
+                break;
+            }
+            let mut c = (a * fb - b * fa) / (fb - fa);
+            if !(c > a && c < b) {
+                c = 0.5 * (a + b);
+            }
+            let fc = self.along(s, inputs, c, h);
+            if (fc > 0.0) == after {
+                b = c;
+                fb = fc;
+                if side == 1 {
+                    fa *= 0.5;
+                }
+                side = 1;
+            } else {
+                a = c;
+                fa = fc;
+                if side == -1 {
+                    fb *= 0.5;
+                }
+                side = -1;
+            }
+        }
+        b
+    }
+
+    /// The switch at time `theta` into the step, on the Hermite cubic of the bar ends.
+    fn along(&self, s: &Switch, inputs: &Inputs, theta: f64, h: f64) -> f64 {
+        let u = theta / h;
+        let (u2, u3) = (u * u, u * u * u);
+        let w = [
+            2.0 * u3 - 3.0 * u2 + 1.0,
+            h * (u3 - 2.0 * u2 + u),
+            -2.0 * u3 + 3.0 * u2,
+            h * (u3 - u2),
+        ];
+        let at = |e: usize| {
+            w[0] * self.x0[e] + w[1] * self.v0[e] + w[2] * self.x1[e] + w[3] * self.v1[e]
+        };
+        match *s {
+            Switch::Cable { a, b, rest } => {
+                let p = |p: Point| match p {
+                    Point::End(e) => at(e),
+                    Point::Fixed(x) => x,
+                };
+                (p(b) - p(a)).norm() - rest_length(rest, inputs)
+            }
+            Switch::Ground {
+                end,
+                normal,
+                height,
+            } => normal.dot(&at(end)) - height,
+        }
+    }
+}
+
+/// Bar-end positions and velocities of the state `y = [q; q̇]`.
+fn ends(model: &Model, y: &[f64], x: &mut [Vector3<f64>], v: &mut [Vector3<f64>]) {
+    let half = y.len() / 2;
+    let (q, qd) = y.split_at(half);
+    for (e, (x, v)) in x.iter_mut().zip(v.iter_mut()).enumerate() {
+        *x = model.coords.end_vector(e, q, true);
+        *v = model.coords.end_vector(e, qd, false);
+    }
+}
+
+fn rest_length(rest: Rest, inputs: &Inputs) -> f64 {
+    match rest {
+        Rest::Fixed(r) => r,
+        Rest::Input(i) => inputs.rest_length[i].max(0.0),
+    }
+}
+
+/// A switch at the bar-end positions `x`.
+fn value(s: &Switch, inputs: &Inputs, x: &[Vector3<f64>]) -> f64 {
+    let p = |p: Point| match p {
+        Point::End(e) => x[e],
+        Point::Fixed(x) => x,
+    };
+    match *s {
+        Switch::Cable { a, b, rest } => (p(b) - p(a)).norm() - rest_length(rest, inputs),
+        Switch::Ground {
+            end,
+            normal,
+            height,
+        } => normal.dot(&x[end]) - height,
+    }
+}
