@@ -27,7 +27,7 @@ use tensegrity_fmu::analysis::modes::{ModeKind, Spectrum};
 use tensegrity_fmu::analysis::tangent::end_jacobian;
 use tensegrity_fmu::analysis::{self, equilibrium, InputChannel, Tangent};
 use tensegrity_fmu::dynamics::{self, Inputs, Workspace};
-use tensegrity_fmu::fmi::variables::{Binding, VariableTable};
+use tensegrity_fmu::fmi::variables::VariableTable;
 use tensegrity_fmu::outputs::{self, OutputGroup};
 use tensegrity_fmu::scene::{builtin, CableControl, GroundSpec, Scene, Start};
 use tensegrity_fmu::sim::State;
@@ -35,19 +35,7 @@ use tensegrity_fmu::Simulation;
 
 /// The FMU's input channels, named as the `linearize` command names them.
 fn channels(sim: &Simulation) -> Vec<(String, InputChannel)> {
-    VariableTable::new(sim)
-        .variables
-        .iter()
-        .filter_map(|v| {
-            let channel = match v.binding {
-                Binding::ForceDensity(k) => InputChannel::ForceDensity(k),
-                Binding::ReelInput(k) => InputChannel::RestLength(k),
-                Binding::NodeForce(k, axis) => InputChannel::NodeForce(k, axis),
-                _ => return None,
-            };
-            Some((v.name.clone(), channel))
-        })
-        .collect()
+    VariableTable::new(sim).input_channels()
 }
 
 fn set_input(inputs: &mut Inputs, channel: InputChannel, delta: f64) {

@@ -6,8 +6,8 @@ use std::path::Path;
 
 use serde_json::json;
 use tensegrity_fmu::analysis::modes::{ModeKind, Spectrum};
-use tensegrity_fmu::analysis::{self, export, linear, InputChannel};
-use tensegrity_fmu::fmi::variables::{Binding, VariableTable};
+use tensegrity_fmu::analysis::{self, export, linear};
+use tensegrity_fmu::fmi::variables::VariableTable;
 use tensegrity_fmu::{outputs, partial, Scene, Simulation};
 
 /// The scene's start state as a simulation, refused unless it is an equilibrium at rest.
@@ -99,20 +99,7 @@ fn shapes_csv(sim: &Simulation, spectrum: &Spectrum) -> String {
 /// `tensegrity-fmu linearize`: the state-space model about the start state, to `output`.
 pub fn linearize(scene: &Scene, output: &Path) -> Result<(), String> {
     let sim = at_rest(scene, "linearize")?;
-    let table = VariableTable::new(&sim);
-    let channels: Vec<(String, InputChannel)> = table
-        .variables
-        .iter()
-        .filter_map(|v| {
-            let channel = match v.binding {
-                Binding::ForceDensity(k) => InputChannel::ForceDensity(k),
-                Binding::ReelInput(k) => InputChannel::RestLength(k),
-                Binding::NodeForce(k, axis) => InputChannel::NodeForce(k, axis),
-                _ => return None,
-            };
-            Some((v.name.clone(), channel))
-        })
-        .collect();
+    let channels = VariableTable::new(&sim).input_channels();
     let outputs = outputs::outputs(&sim);
     let model = linear::linearize(&sim, &channels, &outputs);
     export::write(output, &model, &scene.name)?;

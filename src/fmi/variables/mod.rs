@@ -9,6 +9,7 @@ mod parameter_table;
 
 use fmi2_model_description::{Causality, Initial, Variability};
 
+use crate::analysis::InputChannel;
 use crate::model::Model;
 use crate::outputs::{self, Quantity};
 use crate::sim::Simulation;
@@ -143,6 +144,22 @@ pub const UNITS: [(&str, [i32; 4]); 12] = [
 ];
 
 impl VariableTable {
+    /// The inputs by name, as channels of the linear model (the FMU's `u`, in its order).
+    pub fn input_channels(&self) -> Vec<(String, InputChannel)> {
+        self.variables
+            .iter()
+            .filter_map(|v| {
+                let channel = match v.binding {
+                    Binding::ForceDensity(k) => InputChannel::ForceDensity(k),
+                    Binding::ReelInput(k) => InputChannel::RestLength(k),
+                    Binding::NodeForce(k, axis) => InputChannel::NodeForce(k, axis),
+                    _ => return None,
+                };
+                Some((v.name.clone(), channel))
+            })
+            .collect()
+    }
+
     /// Builds the table for a simulation's model (start values from its current inputs).
     pub fn new(sim: &Simulation) -> Self {
         let model = sim.model();
