@@ -184,7 +184,7 @@ fn solver_method_and_max_steps_are_integers() {
     assert_eq!(kind, "Integer");
     assert_eq!(
         (t["start"].as_str(), t["min"].as_str(), t["max"].as_str()),
-        ("1", "1", "3")
+        ("1", "1", "4")
     );
     assert!(method["description"].contains("1 = rk4, 2 = dopri5"));
     let (steps, (kind, t)) = &vars["solver.max_steps"];
