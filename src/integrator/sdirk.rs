@@ -42,6 +42,10 @@ pub struct Sdirk3 {
     stage: Vec<f64>,
     dy: Vec<f64>,
     residual: DVector<f64>,
+    /// The stage velocity Newton iterates on.
+    newton: Vec<f64>,
+    /// The state at the start of a step, restored when Newton fails.
+    saved: Vec<f64>,
     /// The factored iteration matrix and the step it was made for, kept across steps
     /// while Newton still converges with it (simplified Newton).
     factored: Option<(f64, LU<f64, Dyn, Dyn>)>,
@@ -73,6 +77,8 @@ impl Sdirk3 {
             stage: vec![0.0; n],
             dy: vec![0.0; n],
             residual: DVector::zeros(m),
+            newton: vec![0.0; m],
+            saved: vec![0.0; n],
             factored: None,
             taken_at: None,
             evaluations: 0,
@@ -116,12 +122,13 @@ impl Sdirk3 {
                     self.base[m + k] += h * a[i][j] * self.accelerations[j][k];
                 }
             }
-            let guess = if i == 0 {
-                &y[m..]
+            // The first guess: the step's start velocity, then the previous stage's.
+            if i == 0 {
+                self.newton.copy_from_slice(&y[m..]);
             } else {
-                &self.velocities[i - 1][..]
-            };
-            let mut v = guess.to_vec();
+                self.newton.copy_from_slice(&self.velocities[i - 1]);
+            }
+            let v = &mut self.newton;
             let mut converged = false;
             for _ in 0..MAX_NEWTON {
                 for k in 0..m {
@@ -156,7 +163,7 @@ impl Sdirk3 {
             for k in 0..m {
                 self.accelerations[i][k] = (v[k] - self.base[m + k]) / hg;
             }
-            self.velocities[i].copy_from_slice(&v);
+            self.velocities[i].copy_from_slice(v);
         }
         // Stiffly accurate: the result is the last stage.
         for k in 0..m {
@@ -168,18 +175,19 @@ impl Sdirk3 {
 
     /// The step, split into halves (recursively) where Newton fails.
     fn step(&mut self, rhs: &mut dyn Rhs, t: f64, y: &mut [f64], h: f64, splits: u32) -> bool {
-        let start = y.to_vec();
+        self.saved.copy_from_slice(y);
         if self.try_step(rhs, t, y, h) {
             return true;
         }
-        y.copy_from_slice(&start);
+        y.copy_from_slice(&self.saved);
         // A matrix from an earlier state may be too stale: retry with a fresh one.
         self.factored = None;
         self.taken_at = None;
         if self.try_step(rhs, t, y, h) {
             return true;
         }
-        y.copy_from_slice(&start);
+        // (The halves below reuse `saved`; it is not needed after this.)
+        y.copy_from_slice(&self.saved);
         if splits == MAX_SPLITS {
             return false;
         }
