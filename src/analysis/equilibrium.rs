@@ -244,11 +244,11 @@ fn residual(model: &Model, inputs: &Inputs, q: &[f64], ws: &mut Workspace) -> f6
     dynamics::accelerations(model, inputs, 0.0, q, &zeros, ws, &mut acc);
     // M̄ η̈₂ per end is M_E ẍ_E; its norm in η₂ is the norm of J_eᵀ M_E ẍ_E.
     let mut force = vec![0.0; q.len()];
-    for (i, bar) in model.bars.iter().enumerate() {
+    for (i, inertia) in model.inertia.iter().enumerate() {
         let (a, b) = (2 * i, 2 * i + 1);
-        let p = [model.payload[a], model.payload[b]];
-        let fa = ws.end_acc[a] * (bar.mass / 3.0 + p[0]) + ws.end_acc[b] * (bar.mass / 6.0);
-        let fb = ws.end_acc[a] * (bar.mass / 6.0) + ws.end_acc[b] * (bar.mass / 3.0 + p[1]);
+        let m = inertia.m;
+        let fa = ws.end_acc[a] * m[0][0] + ws.end_acc[b] * m[0][1];
+        let fb = ws.end_acc[a] * m[1][0] + ws.end_acc[b] * m[1][1];
         model.coords.scatter(a, &fa, &mut force);
         model.coords.scatter(b, &fb, &mut force);
     }

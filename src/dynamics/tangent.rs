@@ -59,13 +59,8 @@ impl Tangent {
         let ends = end_jacobian(model);
         let n_ends = model.coords.n_ends();
         let mut end_mass = DMatrix::zeros(3 * n_ends, 3 * n_ends);
-        for (i, bar) in model.bars.iter().enumerate() {
-            let p = [model.payload[2 * i], model.payload[2 * i + 1]];
-            let m = [
-                [bar.mass / 3.0 + p[0], bar.mass / 6.0],
-                [bar.mass / 6.0, bar.mass / 3.0 + p[1]],
-            ];
-            for (r, row) in m.iter().enumerate() {
+        for (i, inertia) in model.inertia.iter().enumerate() {
+            for (r, row) in inertia.m.iter().enumerate() {
                 for (c, &value) in row.iter().enumerate() {
                     add_block(
                         &mut end_mass,

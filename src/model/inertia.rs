@@ -9,6 +9,8 @@ use nalgebra::{Matrix3, Vector3};
 /// The constant inverse mass data of one bar.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct BarInertia {
+    /// End mass matrix `[[m/3 + p_a, m/6], [m/6, m/3 + p_b]]`, kg.
+    pub m: [[f64; 2]; 2],
     /// Inverse end mass matrix `[[W_aa, W_ab], [W_ab, W_bb]]`, 1/kg.
     pub w: [[f64; 2]; 2],
     /// `α = W_ab − W_aa`, 1/kg.
@@ -24,6 +26,7 @@ impl BarInertia {
         let det = maa * mbb - mab * mab;
         let w = [[mbb / det, -mab / det], [-mab / det, maa / det]];
         Self {
+            m: [[maa, mab], [mab, mbb]],
             w,
             alpha: w[0][1] - w[0][0],
             beta: w[1][1] - w[0][1],
