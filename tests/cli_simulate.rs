@@ -183,6 +183,8 @@ fn absurd_output_is_refused_before_writing() {
         "1",
         "--step-size",
         "1e-6",
+        "--method",
+        "rk4",
         "-o",
         csv.to_str().unwrap(),
     ]);
@@ -208,6 +210,8 @@ fn a_failed_run_leaves_no_csv_and_keeps_an_old_one() {
         "0.01",
         "--inputs",
         inputs.to_str().unwrap(),
+        "--method",
+        "rk4",
         "-o",
         csv.to_str().unwrap(),
     ]);

@@ -65,7 +65,7 @@ fn values_are_shown_by_name_with_variability() {
     let html = page(&builtin("prism2").unwrap());
     // name, causality, variability, type, unit, start, meaning
     let method = row(&html, "solver.method");
-    assert_eq!(method[2..6], ["Fixed", "Integer", "", "1 (rk4)"]);
+    assert_eq!(method[2..6], ["Fixed", "Integer", "", "2 (dopri5)"]);
     let correction = row(&html, "solver.correction");
     assert_eq!(correction[3..6], ["Boolean", "", "true"]);
     let steps = row(&html, "solver.max_steps");

@@ -6,6 +6,7 @@
 use nalgebra::Vector3;
 use tensegrity_fmu::analysis;
 use tensegrity_fmu::analysis::modes::{ModeKind, Spectrum};
+use tensegrity_fmu::integrator::Method;
 use tensegrity_fmu::scene::{builtin, tower_scene, GroundSpec, PrestressSpec, Scene, Start};
 use tensegrity_fmu::Simulation;
 
@@ -13,6 +14,7 @@ const GRAVITY: [f64; 3] = [0.0, 0.0, -9.81];
 
 fn settled(mut scene: Scene) -> Scene {
     scene.start = Start::Equilibrium;
+    scene.solver.method = Method::Rk4;
     scene
 }
 

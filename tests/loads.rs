@@ -2,6 +2,7 @@
 //! scene, evaluated at the integrator's stage times.
 
 use nalgebra::Vector3;
+use tensegrity_fmu::integrator::Method;
 use tensegrity_fmu::scene::{builtin, LoadSpec, Scene};
 use tensegrity_fmu::{Model, Simulation};
 
@@ -89,6 +90,7 @@ fn sampled_sinusoid(amplitude: f64, frequency: f64, comm: f64, h: f64) -> Vec<Ve
 fn scripted_sinusoid_matches_inputs_extrapolated_to_zero_step() {
     let (amplitude, frequency, h) = (3.0, 2.0, 1.25e-4);
     let mut scene = prism();
+    scene.solver.method = Method::Rk4;
     scene.solver.step_size = h;
     scene.loads = vec![LoadSpec::Sinusoidal {
         node: 7,

@@ -184,7 +184,7 @@ fn solver_method_and_max_steps_are_integers() {
     assert_eq!(kind, "Integer");
     assert_eq!(
         (t["start"].as_str(), t["min"].as_str(), t["max"].as_str()),
-        ("1", "1", "4")
+        ("2", "1", "4")
     );
     assert!(method["description"].contains("1 = rk4, 2 = dopri5"));
     let (steps, (kind, t)) = &vars["solver.max_steps"];
@@ -198,7 +198,12 @@ fn solver_method_and_max_steps_are_integers() {
 fn tunable_and_fixed_parameters() {
     let els = elements(&golden_model_description(&every_effect(1e-3)).unwrap());
     let vars = variables(&els);
-    let fixed = ["solver.step_size", "solver.method", "solver.correction"];
+    let fixed = [
+        "solver.step_size",
+        "solver.method",
+        "solver.correction",
+        "solver.locate_events",
+    ];
     let mut tunable = vec![
         "solver.max_steps".to_string(),
         "solver.rtol".into(),

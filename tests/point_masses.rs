@@ -17,6 +17,7 @@ mod point_mass_support;
 use kkt_support::{compare_with_kkt, kkt_solve, random_scene, H};
 use nalgebra::Vector3;
 use point_mass_support::{cable_held_bar, node_payload, payloads, scene_from};
+use tensegrity_fmu::integrator::Method;
 use tensegrity_fmu::model::CableLaw;
 use tensegrity_fmu::scene::builtin;
 use tensegrity_fmu::{Model, Scene, SceneError, Simulation};
@@ -213,7 +214,8 @@ struct Drifts {
 /// Runs the free icosahedron with `list` for 5 s at step `h`, with or without the
 /// correction, checking every 10 steps against the start.
 fn free_run(list: &[(usize, f64)], h: f64, correction: bool) -> Drifts {
-    let scene = free_icosahedron(list);
+    let mut scene = free_icosahedron(list);
+    scene.solver.method = Method::Rk4;
     let masses = Masses::of(&scene);
     let mut sim = Simulation::new(Model::new(&scene).unwrap());
     sim.correction = correction;

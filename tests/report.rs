@@ -4,8 +4,10 @@
 
 use std::path::PathBuf;
 
+use tensegrity_fmu::integrator::Method;
 use tensegrity_fmu::report::{self, Options, COLUMNS};
 use tensegrity_fmu::scene::builtin;
+use tensegrity_fmu::{Model, Simulation};
 
 struct Row {
     method: String,
@@ -95,7 +97,7 @@ fn prism2_accuracy_report() {
     let (header, rows) = parse(&std::fs::read_to_string(&r.csv).unwrap());
     assert_eq!(header, COLUMNS);
     assert_eq!(rows.len(), r.runs.len(), "a row per run");
-    for method in ["rk4", "rattle", "dopri5"] {
+    for method in ["rk4", "rattle", "sdirk3", "dopri5"] {
         for on in [true, false] {
             let n = rows
                 .iter()
@@ -117,7 +119,7 @@ fn prism2_accuracy_report() {
 
     // Each curve, by cost: errors fall while they are well above the reference's own
     // error; near it, a factor 2 of noise is allowed.
-    for method in ["rk4", "rattle", "dopri5"] {
+    for method in ["rk4", "rattle", "sdirk3", "dopri5"] {
         let mut curve: Vec<[f64; 6]> = rows
             .iter()
             .filter(|x| x.method == method && x.correction)
@@ -160,7 +162,89 @@ fn prism2_accuracy_report() {
     );
     assert!(length > 1e-12, "length error {length}");
 
-    assert_png(&r.work_precision);
-    assert_png(&r.constraint_error);
+    assert_png(r.work_precision.as_ref().expect("drawn"));
+    assert_png(r.constraint_error.as_ref().expect("drawn"));
     let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// A short report with one step per fixed-step method and one dopri5 tolerance.
+fn short_report(scene: &tensegrity_fmu::scene::Scene, name: &str) -> report::Report {
+    let dir = std::env::temp_dir().join(format!("tensegrity-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    let options = Options {
+        horizon: 0.2,
+        fixed_steps: 2,
+        dopri5_tols: vec![1e-6],
+        min_repeats: 1,
+        min_timing_s: 0.0,
+        ..Options::default()
+    };
+    let r = report::accuracy(scene, &options, &dir).expect("the report runs");
+    let _ = std::fs::remove_dir_all(&dir);
+    r
+}
+
+/// Steel-stiff cables (κ = 1e6 N/m, 100 N prestress): rk4's sweep starts at the largest
+/// step that divides the 10 ms output interval and is stable for this scene: that step
+/// runs, the next larger one is refused by the stability guard, and no run fails.
+#[test]
+fn fixed_step_sweeps_start_at_the_scenes_stability_limit() {
+    let mut scene = builtin("prism2-elastic").unwrap();
+    for c in &mut scene.cables {
+        c.stiffness = Some(1e6);
+    }
+    scene.prestress = Some(tensegrity_fmu::scene::PrestressSpec { min_tension: 100.0 });
+    let r = short_report(&scene, "limit");
+    let first = |m: Method| {
+        r.runs
+            .iter()
+            .filter(|x| x.method == m)
+            .map(|x| x.setting)
+            .fold(0.0, f64::max)
+    };
+    let h = first(Method::Rk4);
+    let parts = (0.01 / h).round();
+    assert!((0.01 / parts - h).abs() < 1e-15, "{h} divides the interval");
+    assert!(parts > 1.0, "the 10 ms interval is above rk4's limit here");
+    let refused = |h: f64| {
+        let mut s = scene.clone();
+        s.solver.method = Method::Rk4;
+        s.solver.step_size = h;
+        Simulation::new(Model::new(&s).unwrap()).stability_problem()
+    };
+    assert_eq!(refused(h), None, "h = {h} s is stable");
+    let larger = 0.01 / (parts - 1.0);
+    assert!(refused(larger).is_some(), "h = {larger} s is refused");
+    assert!(r.runs.iter().all(|x| x.result.is_ok()), "{}", r.markdown);
+    // sdirk3, stable at any step, starts at the output interval.
+    assert_eq!(first(Method::Sdirk3), 0.01);
+    assert!(!r.markdown.contains("Failed:"), "{}", r.markdown);
+    println!("rk4 starts at h = {h} s (10 ms / {parts})");
+}
+
+/// The energy column says which terms its E leaves out: none for a conservative scene,
+/// cable damping and the scripted loads' work where a scene has them.
+#[test]
+fn energy_column_names_what_it_leaves_out() {
+    let plain = short_report(&builtin("prism2").unwrap(), "plain");
+    assert!(
+        plain.markdown.contains("the exact solution conserves it"),
+        "{}",
+        plain.markdown
+    );
+    let mut damped = builtin("prism2-elastic").unwrap();
+    damped.cables[0].damping = Some(2.0);
+    damped.loads = vec![tensegrity_fmu::scene::LoadSpec::Sinusoidal {
+        node: 7,
+        amplitude: [1.0, 0.0, 0.0],
+        frequency: 1.0,
+        phase: 0.0,
+    }];
+    let r = short_report(&damped, "damped");
+    assert!(
+        r.markdown
+            .contains("it leaves out cable damping losses, the work of the scripted loads"),
+        "{}",
+        r.markdown
+    );
 }

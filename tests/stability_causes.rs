@@ -5,12 +5,15 @@
 mod cli_support;
 use cli_support::{run, temp};
 
+use tensegrity_fmu::integrator::Method;
 use tensegrity_fmu::scene::{builtin, GroundSpec, Scene};
 use tensegrity_fmu::{Model, Simulation};
 
-/// prism2-elastic with cable `j` (1-based; all cables for `None`) at `stiffness`.
+/// prism2-elastic with cable `j` (1-based; all cables for `None`) at `stiffness`, run
+/// with rk4 at 1 ms (the default, dopri5, has no stability limit to guard).
 fn stiff_cables(which: Option<usize>, stiffness: f64) -> Scene {
     let mut scene = builtin("prism2-elastic").unwrap();
+    scene.solver.method = Method::Rk4;
     for (j, c) in scene.cables.iter_mut().enumerate() {
         if which.is_none_or(|k| k == j + 1) {
             c.stiffness = Some(stiffness);
@@ -19,9 +22,10 @@ fn stiff_cables(which: Option<usize>, stiffness: f64) -> Scene {
     scene
 }
 
-/// prism2, unpinned, standing under gravity on a ground (its bottom ring at the surface).
+/// prism2 (rk4 at 1 ms), unpinned, standing under gravity on a ground (its bottom ring at the surface).
 fn prism_on_ground(stiffness: f64, friction: f64) -> Scene {
     let mut scene = builtin("prism2").unwrap();
+    scene.solver.method = Method::Rk4;
     scene.name = "prism-on-ground".into();
     scene.fixed.clear();
     scene.gravity = Some([0.0, 0.0, -9.81]);
@@ -226,6 +230,20 @@ fn build_warns_once_that_the_fmu_will_refuse_its_own_settings() {
     assert!(err.contains("soften cables[4] to stiffness ≤"), "{err}");
     // A scene within its limit builds without the warning.
     let file = scene_file(&stiff_cables(Some(4), 1e5), "soft.toml");
+    let (ok, _, err) = run(&[
+        "build",
+        &file,
+        "--binary",
+        binary.to_str().unwrap(),
+        "-o",
+        fmu.to_str().unwrap(),
+    ]);
+    assert!(ok, "{err}");
+    assert!(!err.contains("stability limit"), "{err}");
+    // At the default method (dopri5, adaptive) the stiff scene has nothing to refuse.
+    let mut adaptive = stiff_cables(Some(4), 1e8);
+    adaptive.solver = Default::default();
+    let file = scene_file(&adaptive, "stiff-default.toml");
     let (ok, _, err) = run(&[
         "build",
         &file,

@@ -20,7 +20,11 @@ use tensegrity_fmu::{Model, Simulation, StepError};
 /// (counting the load's potential) drifts ≤ 1e-6. rk4 at a fixed 1 ms is run too, as the
 /// "requested setting the method cannot meet": it must either stay sane (finite, exact
 /// constraints at every accepted point, energy drift ≤ 1e-2) or refuse with a StepError
-/// that keeps the last good state; its difference to rk4 at 0.1 ms is reported.
+/// that keeps the last good state; its difference to rk4 at 0.1 ms is reported. sdirk3
+/// at a fixed 1 ms (stable at any step) runs with exact constraints and stays within
+/// 1e-3 m of dopri5 (the top moves 1.4 mm): it damps the fast ringing the sudden load
+/// excites, measured 7.5e-6, 1.7e-4 and 2.4e-4 m for κ = 1e5, 1e6, 1e7 (its accuracy on a
+/// slow response is tests/stiff.rs').
 fn stiff_cables(kappa: f64) {
     let case = format!("stiff_cables_{kappa:.0e}");
     let (a, ta, taut) = stiff_run(kappa, Method::Dopri5, 1e-3, 1e-3);
@@ -47,7 +51,18 @@ fn stiff_cables(kappa: f64) {
             sci(diff)
         ));
     }
-    report(&[d, k]);
+    let (sd, tsd, _) = stiff_run(kappa, Method::Sdirk3, 1e-3, 1e-3);
+    let diff = max_distance(&positions(&sd), &positions(&b));
+    let mut i = Outcome::from_tracker(&case, "sdirk3", &tsd, false);
+    i.check_exact()
+        .check(tsd.error.is_none(), "no step error")
+        .check(diff <= 1e-3, "fixed 1 ms: |dx| vs dopri5 <= 1e-3 m");
+    i.note(format!(
+        "fixed 1 ms: |dx| vs dopri5 (rtol=atol=1e-9, 0.1 ms comm) = {} m; energy drift {} (it damps the fast cable modes)",
+        sci(diff),
+        sci(tsd.max_drift)
+    ));
+    report(&[d, k, i]);
 }
 
 #[test]
@@ -95,7 +110,12 @@ fn long_horizon_icosahedron_1e6_steps() {
 /// Check: tensions are never negative, some cable goes slack and taut again ≥ 3 times,
 /// and the largest node-position difference between successive refinements (step h, h/2,
 /// h/4; dopri5: tolerance 1e-6, 1e-7, 1e-8) shrinks by ≥ 1.5× with each refinement
-/// (the kinks of the slack law cap the observed order).
+/// (the kinks of the slack law, where not located, cap the observed order).
+/// Runs closer than this agree to the tightest dopri5 tolerance of the refinements (1e-8);
+/// with the switches located, dopri5's refinements differ by ~1e-9 m from the first one
+/// (2.9e-4 m without), so there is no further shrinking to see.
+const AGREED: f64 = 1e-8;
+
 #[test]
 fn slack_and_taut_heavy_sinusoid() {
     let mut rows = Vec::new();
@@ -116,7 +136,10 @@ fn slack_and_taut_heavy_sinusoid() {
                 *retension >= 3,
                 "a cable goes slack and taut again >= 3 times",
             )
-            .check(d2 <= d1 / 1.5, "differences shrink >= 1.5x per refinement");
+            .check(
+                d2 <= d1 / 1.5 || d1.max(d2) <= AGREED,
+                "differences shrink >= 1.5x per refinement, or the runs agree within 1e-8 m",
+            );
         o.note(format!(
             "30 N, 2 Hz, 2 s; least tension {least:.1} N; {retension} re-tensionings of one cable; |dx| between refinements {} -> {} m (energy not conserved: loads vary)",
             sci(d1), sci(d2)
@@ -165,7 +188,8 @@ fn big_communication_steps_1s_10s() {
 // ------------------------------------------------------------------ 5. class-k joints
 
 /// Check: tower20 (57 class-2 joints in 3 chains of 20 bars) under 1 N, 2 s: exact
-/// constraints, energy drift ≤ 1e-6 (rk4, dopri5) / 1e-4 (rattle).
+/// constraints, energy drift ≤ 1e-6 (rk4, dopri5) / 1e-4 (rattle) / 1e-7 (sdirk3,
+/// measured 6.3e-9: its damping of the fast modes takes out what little they hold).
 #[test]
 fn class_k_many_joints_tower20() {
     let s = builtin("tower20").unwrap();
@@ -176,7 +200,7 @@ fn class_k_many_joints_tower20() {
         &s,
         2.0,
         1.0,
-        [1e-6, 1e-4, 1e-6],
+        [1e-6, 1e-4, 1e-6, 1e-7],
         &note,
     ));
 }
@@ -192,7 +216,7 @@ fn class_k_tower100() {
         &s,
         1.0,
         1.0,
-        [1e-6, 1e-4, 1e-6],
+        [1e-6, 1e-4, 1e-6, 1e-7],
         &format!("{j} joints, 1 N top load, 1 s"),
     );
     rows.truncate(1);
@@ -201,7 +225,8 @@ fn class_k_tower100() {
 
 /// Check: a free apex shared by three bars (class 3) swinging under gravity for 3 s:
 /// exact constraints, energy drift ≤ 1e-5 (rk4; the ring cables go slack and taut
-/// again, whose kinks cost rk4 accuracy) / 1e-3 (rattle) / 1e-6 (dopri5).
+/// again, whose kinks cost rk4 accuracy) / 1e-3 (rattle) / 1e-6 (dopri5) / 1e-3
+/// (sdirk3, measured 1.5e-4: third order, and it damps what the re-tensioning excites).
 #[test]
 fn class_k_tripod_joint() {
     let s = tripod();
@@ -211,7 +236,7 @@ fn class_k_tripod_joint() {
         &s,
         3.0,
         0.0,
-        [1e-5, 1e-3, 1e-6],
+        [1e-5, 1e-3, 1e-6, 1e-3],
         "apex shared by 3 bars, gravity, ring cables slack and re-tension, 3 s",
     ));
 }
@@ -354,13 +379,16 @@ fn very_short_cable() {
 /// Check: a free 1 m, 1 kg bar spinning at 100 rad/s (ωh = 0.1 at 1 ms) for 1 s: exact
 /// constraints; node positions within a limit of the exact rotation (rk4 1 ms: 1e-3 m;
 /// rattle 1 ms: 0.2 m, as its second-order phase error is ~(ωh)²/6 per radian, 0.17 rad
-/// here; dopri5 1e-10: 1e-6 m); the bar force equals the centrifugal −mω²l/12 to 1e-4
-/// (relative) and the angular momentum is conserved to 1e-4 (relative).
+/// here; dopri5 1e-10: 1e-6 m; sdirk3 at 0.25 ms: 1e-2 m, as at 1 ms its third-order,
+/// dissipative phase and amplitude errors leave 6.4e-2 m, 5e-3 in the bar force and
+/// 2.6e-3 in the angular momentum); the bar force equals the centrifugal −mω²l/12 to
+/// 1e-4 (relative) and the angular momentum is conserved to 1e-4 (relative).
 #[test]
 fn fast_spin_100_rad_s() {
     let omega = 100.0;
     let mut rows = Vec::new();
-    for ((method, h, tol), limit) in methods(1e-10).into_iter().zip([1e-3, 0.2, 1e-6]) {
+    for ((method, h, tol), limit) in methods(1e-10).into_iter().zip([1e-3, 0.2, 1e-6, 1e-2]) {
+        let h = if method == Method::Sdirk3 { h / 4.0 } else { h };
         let mut sim = build(&with_solver(spinning_bar(omega), method, h, tol));
         let l0 = sim.angular_momentum();
         let mut t = Tracker::new(&mut sim);
@@ -486,7 +514,7 @@ fn negative_force_density_clamped() {
 /// bit for bit.
 #[test]
 fn nan_and_infinite_inputs_rejected() {
-    let mut sim = build(&builtin("prism2").unwrap());
+    let mut sim = build(&rk4(builtin("prism2").unwrap()));
     let mut clean = sim.clone();
     let mut t = Tracker::new(&mut sim);
     let _ = t.run(&mut sim, 0.1, 1e-3, |_, _| {});

@@ -48,6 +48,10 @@ enum Command {
         /// Turn the constraint correction off.
         #[arg(long)]
         no_correction: bool,
+        /// Take steps across cable slack/taut and ground contact switches whole instead of
+        /// splitting them there (solver.locate_events = false).
+        #[arg(long)]
+        no_event_location: bool,
         /// Integration method: rk4, dopri5, rattle or sdirk3 (default: the scene's solver.method).
         #[arg(long)]
         method: Option<String>,
@@ -169,6 +173,7 @@ pub fn run(cli: Cli) -> Result<(), String> {
             interval,
             inputs,
             no_correction,
+            no_event_location,
             method,
             rtol,
             atol,
@@ -186,6 +191,7 @@ pub fn run(cli: Cli) -> Result<(), String> {
             solver.rtol = rtol.unwrap_or(solver.rtol);
             solver.atol = atol.unwrap_or(solver.atol);
             solver.correction &= !no_correction;
+            solver.locate_events &= !no_event_location;
             let request = simulate::Request {
                 time,
                 interval,

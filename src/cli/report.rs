@@ -51,7 +51,12 @@ pub fn run(command: ReportCommand) -> Result<(), String> {
             eprintln!("done in {:.1} s", started.elapsed().as_secs_f64());
             println!("{}", r.markdown);
             println!("Written:\n");
-            for p in [&r.csv, &r.work_precision, &r.constraint_error] {
+            let pictures = [&r.work_precision, &r.constraint_error];
+            for p in [Some(&r.csv)]
+                .into_iter()
+                .chain(pictures.map(Option::as_ref))
+                .flatten()
+            {
                 println!("- {}", p.display());
             }
             Ok(())

@@ -215,6 +215,7 @@ fn footprint(model: &Model, binding: Binding) -> Footprint {
         Binding::Output(_)
         | Binding::StepSize
         | Binding::Correction
+        | Binding::LocateEvents
         | Binding::Method
         | Binding::MaxSteps
         | Binding::Rtol

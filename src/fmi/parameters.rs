@@ -10,6 +10,7 @@ pub(super) fn read_parameter(scene: &Scene, binding: Binding) -> f64 {
     match binding {
         Binding::StepSize => scene.solver.step_size,
         Binding::Correction => f64::from(u8::from(scene.solver.correction)),
+        Binding::LocateEvents => f64::from(u8::from(scene.solver.locate_events)),
         Binding::Method => f64::from(scene.solver.method.fmi_value()),
         Binding::MaxSteps => scene.solver.max_steps as f64,
         Binding::Rtol => scene.solver.rtol,
@@ -39,6 +40,7 @@ pub(super) fn apply_parameter(scene: &mut Scene, binding: Binding, value: f64) {
     match binding {
         Binding::StepSize => scene.solver.step_size = value,
         Binding::Correction => scene.solver.correction = value != 0.0,
+        Binding::LocateEvents => scene.solver.locate_events = value != 0.0,
         Binding::Method => {
             if let Some(m) = Method::from_fmi_value(value) {
                 scene.solver.method = m;

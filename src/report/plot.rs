@@ -92,7 +92,7 @@ fn minor_decades(lo: f64, hi: f64) -> Vec<f64> {
 /// each point labelled with its setting.
 pub(crate) fn work_precision(report: &Report, path: &Path) -> Result<(), String> {
     register_font()?;
-    let curves: Vec<(Method, Vec<Point>)> = [Method::Rk4, Method::Rattle, Method::Dopri5]
+    let curves: Vec<(Method, Vec<Point>)> = super::SWEPT
         .into_iter()
         .map(|method| {
             let mut pts: Vec<_> = report
@@ -225,7 +225,9 @@ fn setting_kind(method: Method) -> &'static str {
 fn short_setting(r: &RunRecord) -> String {
     match r.method {
         Method::Dopri5 => format!("{:.0e}", r.setting),
-        Method::Rk4 | Method::Rattle | Method::Sdirk3 => format!("{} ms", r.setting * 1e3),
+        Method::Rk4 | Method::Rattle | Method::Sdirk3 => {
+            format!("{} ms", super::short(r.setting * 1e3))
+        }
     }
 }
 
@@ -272,6 +274,7 @@ pub(crate) fn constraint_error(report: &Report, path: &Path) -> Result<(), Strin
             .runs
             .iter()
             .find(|r| r.method == Method::Rk4 && r.correction == on && r.setting == h)
+            .filter(|r| r.result.is_ok())
     };
     // The largest RK4 step without correction, when it is not the scene's.
     let coarsest = report

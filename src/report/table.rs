@@ -96,7 +96,7 @@ fn wall(r: &RunRecord) -> f64 {
 }
 
 /// The printed summary.
-pub(crate) fn markdown(report: &Report, load: f64) -> String {
+pub(crate) fn markdown(report: &Report, load: f64, unconserved: &[&str]) -> String {
     let mut s = String::new();
     let rc = &report.reference;
     let _ = writeln!(s, "### Accuracy report: {}\n", report.scene);
@@ -162,7 +162,7 @@ pub(crate) fn markdown(report: &Report, load: f64) -> String {
     let head: Vec<String> = TARGETS.iter().map(|t| format!("{t:.0e} m")).collect();
     let _ = writeln!(s, "| method | {} |", head.join(" | "));
     let _ = writeln!(s, "|---|{}", "---:|".repeat(TARGETS.len()));
-    for method in [Method::Rk4, Method::Rattle, Method::Dopri5] {
+    for method in super::SWEPT {
         let cells: Vec<String> = TARGETS
             .iter()
             .map(|&t| match recommend(&report.runs, t, &[method]) {
@@ -193,27 +193,76 @@ pub(crate) fn markdown(report: &Report, load: f64) -> String {
             r.setting_label()
         );
     }
-    let failed: Vec<String> = report
-        .runs
-        .iter()
-        .filter_map(|r| {
-            let e = r.result.as_ref().err()?;
-            let on = if r.correction { "on" } else { "off" };
-            Some(format!(
-                "{} {} correction {on}: {e}",
-                r.method.name(),
-                r.setting_label()
-            ))
-        })
-        .collect();
-    if !failed.is_empty() {
-        let _ = writeln!(s, "\nFailed runs (status `failed` in the CSV):\n");
-        for f in failed {
-            let _ = writeln!(s, "- {f}");
+    let _ = writeln!(s, "\n{}", energy_note(unconserved));
+    if let Some(line) = failed_line(&report.runs) {
+        let _ = writeln!(s, "\n{line}");
+    }
+    for (picture, what) in [
+        (&report.work_precision, "work_precision.png: no run"),
+        (
+            &report.constraint_error,
+            "constraint_error.png: neither RK4 run at the figure's step",
+        ),
+    ] {
+        if picture.is_none() {
+            let _ = writeln!(s, "\nNot drawn: {what} reached the horizon.");
         }
     }
     s
 }
+
+/// What the energy-drift column measures for this scene.
+fn energy_note(unconserved: &[&str]) -> String {
+    let counted = "Energy drift: E counts kinetic energy, cable strain, gravity, the ground \
+                   penalty and the potential of the constant loads";
+    if unconserved.is_empty() {
+        format!(
+            "{counted}; the exact solution conserves it, so the column measures the integrator."
+        )
+    } else {
+        format!(
+            "{counted}; it leaves out {}, which change E of the exact solution too, so on this \
+             scene the column measures those as well as the integrator.",
+            unconserved.join(", ")
+        )
+    }
+}
+
+/// The failed runs folded into one line: how many, which methods and settings, and the
+/// first error (each has status `failed` in the CSV).
+fn failed_line(runs: &[RunRecord]) -> Option<String> {
+    let failed: Vec<&RunRecord> = runs.iter().filter(|r| r.result.is_err()).collect();
+    let first = failed.first()?;
+    let mut groups: Vec<String> = Vec::new();
+    for method in super::SWEPT {
+        let mut settings: Vec<String> = Vec::new();
+        for r in failed.iter().filter(|r| r.method == method) {
+            let label = r.setting_label();
+            if !settings.contains(&label) {
+                settings.push(label);
+            }
+        }
+        if !settings.is_empty() {
+            groups.push(format!("{} {}", method.name(), settings.join(", ")));
+        }
+    }
+    let error = first.result.as_ref().err()?;
+    let cut: String = error.chars().take(MAX_ERROR).collect();
+    let more = if cut.len() < error.len() { " …" } else { "" };
+    Some(format!(
+        "Failed: {} of {} runs (status `failed` in the CSV, left out of the tables and \
+         pictures): {}. The first, {} {} correction {}: {cut}{more}",
+        failed.len(),
+        runs.len(),
+        groups.join("; "),
+        first.method.name(),
+        first.setting_label(),
+        if first.correction { "on" } else { "off" },
+    ))
+}
+
+/// Characters of the first failure's message quoted in the summary line.
+const MAX_ERROR: usize = 300;
 
 /// A note when several dopri5 tolerances took the very same steps: the output interval,
 /// where every advance ends, capped its step.
@@ -246,6 +295,7 @@ fn capped_note(report: &Report) -> Option<String> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::report::Metrics;
 
     #[test]
     fn a_failed_run_is_a_failed_row_with_empty_figures() {
@@ -261,5 +311,40 @@ mod tests {
         assert_eq!(lines[0], COLUMNS.join(","));
         assert_eq!(lines[1], "rk4,1e-3,on,failed,,,,,,");
         assert!(recommend(&[], 1e-3, &[]).is_none());
+    }
+
+    #[test]
+    fn failed_runs_fold_into_one_line() {
+        let run = |method, setting, correction, result: Result<(), &str>| RunRecord {
+            method,
+            setting,
+            correction,
+            result: result
+                .map(|_| Metrics {
+                    wall_time_s: 0.1,
+                    max_position_error_m: 1e-6,
+                    max_length_error_m: 0.0,
+                    max_orthogonality_error_m2_s: 0.0,
+                    energy_drift_rel: 0.0,
+                    rhs_evaluations: 10,
+                })
+                .map_err(String::from),
+            length_error_series: Vec::new(),
+        };
+        let runs = [
+            run(Method::Rk4, 8e-3, true, Err("blew up at t = 0.1 s")),
+            run(Method::Rk4, 8e-3, false, Err("blew up at t = 0.2 s")),
+            run(Method::Rk4, 4e-3, true, Err("blew up")),
+            run(Method::Rattle, 4e-3, false, Err("blew up")),
+            run(Method::Rk4, 2e-3, true, Ok(())),
+        ];
+        let line = failed_line(&runs).expect("a line");
+        assert_eq!(
+            line,
+            "Failed: 4 of 5 runs (status `failed` in the CSV, left out of the tables and \
+             pictures): rk4 h = 8 ms, h = 4 ms; rattle h = 4 ms. The first, rk4 h = 8 ms \
+             correction on: blew up at t = 0.1 s"
+        );
+        assert!(failed_line(&runs[4..]).is_none());
     }
 }

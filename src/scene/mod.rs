@@ -276,6 +276,9 @@ pub struct SolverSpec {
     pub step_size: f64,
     /// Apply the paper's constraint correction after every step.
     pub correction: bool,
+    /// Split a step where a cable goes slack or taut or a contact point touches or leaves
+    /// the ground, so the method keeps its order across these kinks.
+    pub locate_events: bool,
     /// Integration method.
     pub method: Method,
     /// Relative tolerance of the adaptive method.
@@ -297,7 +300,8 @@ impl Default for SolverSpec {
         Self {
             step_size: 1e-3,
             correction: true,
-            method: Method::Rk4,
+            locate_events: true,
+            method: Method::Dopri5,
             rtol: 1e-6,
             atol: 1e-9,
             max_steps: Self::DEFAULT_MAX_STEPS,

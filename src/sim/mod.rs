@@ -69,9 +69,7 @@ pub struct Simulation {
     pub correction: bool,
     /// Refuse fixed steps above the explicit method's stability limit (on by default).
     pub guard_stability: bool,
-    /// Split steps where a force law switches (see `events`). Off by default for now:
-    /// turning it on changes every run with slack cables or ground contact, so it waits
-    /// until the README's figures and pictures are regenerated with it.
+    /// Split steps where a force law switches (see `events`); `solver.locate_events`.
     pub locate_events: bool,
     events: events::Events,
     stability: Stability,
@@ -153,7 +151,7 @@ impl Simulation {
             stepped_inputs: Inputs::start(&model),
             correction: model.solver.correction,
             guard_stability: true,
-            locate_events: false,
+            locate_events: model.solver.locate_events,
             events: events::Events::new(&model),
             stability: Stability::default(),
             advance_start: State {

@@ -185,7 +185,11 @@ impl Simulation {
             }
             fixes.push(fix);
         }
-        fixes.push("solver.method = \"dopri5\" (adaptive steps)".into());
+        fixes.push("solver.method = \"dopri5\" (adaptive steps, the default)".into());
+        fixes.push(
+            "solver.method = \"sdirk3\" (implicit: stable at this step, it damps the modes faster than 1/h)"
+                .into(),
+        );
         Some(format!(
             "solver.step_size = {h} s is above {}'s stability limit for this scene, h ≤ {:.3e} s \
              (h ω ≤ {limit:.3}), so the run would blow up: its fastest rate, ω ≈ {omega:.3e} 1/s, \

@@ -30,6 +30,8 @@ pub enum Binding {
     StepSize,
     /// `solver.correction`.
     Correction,
+    /// `solver.locate_events`.
+    LocateEvents,
     /// `solver.method` (Integer: 1-based index in `Method::ALL`).
     Method,
     /// `solver.max_steps` (Integer).
@@ -199,11 +201,11 @@ impl VariableTable {
 }
 
 /// Whether a user may change the parameter behind `binding` in a running co-simulation:
-/// everything except the integrator's set-up (step size, method, correction).
+/// everything except the integrator's set-up (step size, method, correction, events).
 pub(crate) fn is_tunable(binding: Binding) -> bool {
     !matches!(
         binding,
-        Binding::StepSize | Binding::Method | Binding::Correction
+        Binding::StepSize | Binding::Method | Binding::Correction | Binding::LocateEvents
     )
 }
 

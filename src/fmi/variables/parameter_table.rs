@@ -18,7 +18,7 @@ fn parameter(
         name,
         value_reference: 0,
         base_type: match binding {
-            Binding::Correction => BaseType::Boolean,
+            Binding::Correction | Binding::LocateEvents => BaseType::Boolean,
             Binding::Method | Binding::MaxSteps => BaseType::Integer,
             _ => BaseType::Real,
         },
@@ -50,6 +50,13 @@ pub(super) fn parameters(model: &Model, vars: &mut Vec<Variable>) {
         "apply the exact bar-length and orthogonality correction after every internal step".into(),
         f64::from(u8::from(model.solver.correction)),
         Binding::Correction,
+    ));
+    vars.push(parameter(
+        "solver.locate_events".into(),
+        None,
+        "split an internal step where a cable goes slack or taut or a node touches or leaves the ground, so the method keeps its order there".into(),
+        f64::from(u8::from(model.solver.locate_events)),
+        Binding::LocateEvents,
     ));
     let method = model.solver.method;
     vars.push(parameter(
