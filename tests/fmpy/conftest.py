@@ -156,12 +156,14 @@ class Slave:
     def vrs(self, names):
         return [self.file.vr[n] for n in names]
 
-    def init(self, params=None, booleans=None, inputs=None, start=0.0, stop=None):
+    def init(self, params=None, booleans=None, inputs=None, start=0.0, stop=None, integers=None):
         """setupExperiment, initialization mode with parameter/input values, exit."""
         self.fmu.setupExperiment(startTime=start, stopTime=stop)
         self.fmu.enterInitializationMode()
         if params:
             self.set(params)
+        if integers:
+            self.fmu.setInteger(self.vrs(integers), list(integers.values()))
         if booleans:
             self.fmu.setBoolean(self.vrs(booleans), [int(bool(v)) for v in booleans.values()])
         if inputs:
@@ -253,3 +255,6 @@ def cable_length(slave: Slave, scene: dict, j: int) -> float:
     return float(np.linalg.norm(pb - pa))
 
 
+# rk4 (solver.method = 1) for tests of fixed-step properties: the default, dopri5, clips its
+# steps at the communication points, so its last bits depend on where they fall.
+RK4 = {"solver.method": 1}

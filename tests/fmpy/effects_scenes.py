@@ -245,6 +245,7 @@ def expected_variables(scene):
     out["energy.total"] = ("output", "J")
     out["solver.step_size"] = ("parameter", "s")
     out["solver.correction"] = ("parameter", None)
+    out["solver.locate_events"] = ("parameter", None)
     out["solver.method"] = ("parameter", None)
     out["solver.max_steps"] = ("parameter", None)
     out["solver.rtol"] = ("parameter", None)

@@ -7,6 +7,8 @@ import numpy as np
 import pytest
 from fmpy.fmi1 import FMICallException
 
+from conftest import RK4
+
 
 @pytest.fixture
 def prism2(fmus):
@@ -85,7 +87,7 @@ def test_non_finite_input_set_state_recovers_snapshot(prism2, open_fmu):
 @pytest.mark.parametrize("force", [1e8, 1e307])
 def test_non_finite_state_is_an_error_and_set_state_recovers(prism2, open_fmu, force):
     """1e307 N overflows in the first internal step; 1e8 N only after a few good ones."""
-    s = open_fmu(prism2).init()
+    s = open_fmu(prism2).init(integers=RK4)
     s.run(10, 0.001)
     snap = s.fmu.getFMUstate()
     good = s.outputs()
@@ -96,7 +98,7 @@ def test_non_finite_state_is_an_error_and_set_state_recovers(prism2, open_fmu, f
     t_ok = s.status_time()
     assert 0.01 - 1e-15 <= t_ok < 0.02
     # the state is the last good point, at the time reported as the last successful one
-    ref = open_fmu(prism2, name="ref").init()
+    ref = open_fmu(prism2, name="ref").init(integers=RK4)
     ref.run(10, 0.001)
     ref.set({"node[7].fx": force})
     ref.run(round((t_ok - 0.01) / 0.001), 0.001)

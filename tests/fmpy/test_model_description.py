@@ -156,7 +156,9 @@ def test_builtin_parameter_starts_match_scene(builtin):
     assert v["solver.correction"].start == str(solver.get("correction", True)).lower()
     methods = {"rk4": 1, "dopri5": 2, "rattle": 3, "sdirk3": 4}
     assert v["solver.method"].type == "Integer"
-    assert int(v["solver.method"].start) == methods[solver.get("method", "rk4")]
+    assert int(v["solver.method"].start) == methods[solver.get("method", "dopri5")]
+    assert v["solver.locate_events"].type == "Boolean"
+    assert v["solver.locate_events"].start == str(solver.get("locate_events", True)).lower()
     assert float(v["solver.rtol"].start) == solver.get("rtol", 1e-6)
     assert float(v["solver.atol"].start) == solver.get("atol", 1e-9)
     for k, bar in enumerate(scene["bars"], start=1):
@@ -393,7 +395,7 @@ def test_max_steps_below_one_is_rejected(builtin, open_fmu):
 
 TUNABLE_PREFIXES = ("gravity.", "ground.", "load[", "point_mass[", "bar[")
 TUNABLE_NAMES = {"solver.max_steps", "solver.rtol", "solver.atol"}
-FIXED_NAMES = {"solver.step_size", "solver.method", "solver.correction"}
+FIXED_NAMES = {"solver.step_size", "solver.method", "solver.correction", "solver.locate_events"}
 
 
 def test_tunable_parameters(builtin, loaded):

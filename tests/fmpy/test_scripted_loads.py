@@ -12,6 +12,8 @@ import math
 
 import numpy as np
 
+from conftest import RK4
+
 AMPLITUDE = 3.0  # N along x on node 7
 FREQUENCY = 2.0  # Hz
 NODE = 7
@@ -53,7 +55,7 @@ def scripted_fmu(fmus):
 
 def run_scripted(open_fmu, fmu, comm, name):
     """Positions at every communication point k·comm, k = 0..STOP/comm."""
-    s = open_fmu(fmu, name=name).init(params={"solver.step_size": INTERNAL_STEP})
+    s = open_fmu(fmu, name=name).init(params={"solver.step_size": INTERNAL_STEP}, integers=RK4)
     n = round(STOP / comm)
     out = [positions(s)]
     for k in range(n):
@@ -66,7 +68,7 @@ def run_sampled(open_fmu, fmu, comm, name, at=0.5):
     """The sinusoid as the node[7].fx input, set before each doStep to its value at
     fraction `at` of the communication step (0.5: midpoint); positions at every
     communication point."""
-    s = open_fmu(fmu, name=name).init(params={"solver.step_size": INTERNAL_STEP})
+    s = open_fmu(fmu, name=name).init(params={"solver.step_size": INTERNAL_STEP}, integers=RK4)
     vr = s.vrs([f"node[{NODE}].fx"])
     n = round(STOP / comm)
     out = [positions(s)]

@@ -7,6 +7,8 @@ import pytest
 from fmpy import simulate_fmu
 from fmpy.fmi1 import FMICallException
 
+from conftest import RK4
+
 from conftest import cable_length
 
 POSITIONS = lambda fmu: [n for n in fmu.outputs if n.startswith("node[") and n[-2] == "."]  # noqa: E731
@@ -231,8 +233,8 @@ def test_correction_parameter_false_gives_larger_length_error(fmus, open_fmu):
 def test_step_size_parameter_sets_the_internal_step(fmus, open_fmu):
     fmu = fmus.builtin("prism2-elastic")
     force = {"node[7].fx": 20.0}
-    coarse = open_fmu(fmu, name="coarse").init(params={"solver.step_size": 0.002}, inputs=force)
-    fine = open_fmu(fmu, name="fine").init(inputs=force)
+    coarse = open_fmu(fmu, name="coarse").init(params={"solver.step_size": 0.002}, inputs=force, integers=RK4)
+    fine = open_fmu(fmu, name="fine").init(inputs=force, integers=RK4)
     # with a 2 ms internal step, one 2 ms communication step is exactly two 1 ms ones
     # of the default only if the parameter was ignored
     coarse.run(10, 0.002)
@@ -240,7 +242,7 @@ def test_step_size_parameter_sets_the_internal_step(fmus, open_fmu):
     pos = POSITIONS(fmu)
     diff = np.max(np.abs(coarse.get(pos) - fine.get(pos)))
     assert 0 < diff < 1e-6
-    again = open_fmu(fmu, name="again").init(params={"solver.step_size": 0.002}, inputs=force)
+    again = open_fmu(fmu, name="again").init(params={"solver.step_size": 0.002}, inputs=force, integers=RK4)
     for k in range(20):
         again.fmu.doStep(k * 0.001, 0.001)  # 1 ms communication steps: shortened internal steps
     assert np.max(np.abs(again.get(pos) - fine.get(pos))) <= 1e-12

@@ -8,7 +8,7 @@ import pytest
 from fmpy.fmi1 import FMICallException
 from fmpy.fmi2 import FMU2Slave, fmi2CallbackFunctions, fmi2CoSimulation, fmi2ModelExchange
 
-from conftest import make_callbacks
+from conftest import RK4, make_callbacks
 
 
 @pytest.fixture
@@ -299,8 +299,8 @@ def test_do_step_bad_point_or_size_is_an_error(prism2, open_fmu, t, h):
 
 def test_one_10ms_step_equals_ten_1ms_steps(fmus, open_fmu):
     fmu = fmus.builtin("prism2-elastic")
-    a = open_fmu(fmu, name="a").init(inputs={"node[7].fx": 20.0})
-    b = open_fmu(fmu, name="b").init(inputs={"node[7].fx": 20.0})
+    a = open_fmu(fmu, name="a").init(inputs={"node[7].fx": 20.0}, integers=RK4)
+    b = open_fmu(fmu, name="b").init(inputs={"node[7].fx": 20.0}, integers=RK4)
     a.run(5, 0.01)
     b.run(50, 0.001)
     assert np.max(np.abs(a.outputs() - b.outputs())) <= 1e-12
@@ -310,20 +310,20 @@ def test_one_10ms_step_equals_ten_1ms_steps(fmus, open_fmu):
 def test_step_not_a_multiple_of_internal_step_shortens_the_last_one(fmus, open_fmu):
     fmu = fmus.builtin("prism2-elastic")
     force = {"node[7].fx": 20.0}
-    a = open_fmu(fmu, name="a").init(inputs=force)
+    a = open_fmu(fmu, name="a").init(inputs=force, integers=RK4)
     a.run(4, 0.0025)
     assert a.status_time() == pytest.approx(0.01, abs=1e-14)
     a.fmu.doStep(a.status_time(), 0.001)  # time continues from 0.01
     assert a.status_time() == pytest.approx(0.011, abs=1e-14)
     # internal steps 1 + 1 + 0.5 ms, then 1 + 1 + 0.5 ms ...
-    b = open_fmu(fmu, name="b").init(inputs=force)
+    b = open_fmu(fmu, name="b").init(inputs=force, integers=RK4)
     for t, h in [(0.0, 0.001), (0.001, 0.001), (0.002, 0.0005)]:
         b.fmu.doStep(t, h)
-    c = open_fmu(fmu, name="c").init(inputs=force)
+    c = open_fmu(fmu, name="c").init(inputs=force, integers=RK4)
     c.fmu.doStep(0.0, 0.0025)
     assert np.max(np.abs(b.outputs() - c.outputs())) <= 1e-12
     # and close to a run in whole internal steps (RK4 error of the shortened steps only)
-    d = open_fmu(fmu, name="d").init(inputs=force)
+    d = open_fmu(fmu, name="d").init(inputs=force, integers=RK4)
     d.run(11, 0.001)
     pos = [n for n in fmu.outputs if n.startswith("node[") and n[-2] == "."]
     diff = np.max(np.abs(a.get(pos) - d.get(pos)))
