@@ -2,6 +2,7 @@
 //! monotonically, at the rate of the viscous power; without it the energy stays within
 //! the integrator's drift. Figures are printed (run with `--nocapture`).
 
+use tensegrity_fmu::integrator::Method;
 use tensegrity_fmu::model::CableLaw;
 use tensegrity_fmu::scene::{builtin, Scene};
 use tensegrity_fmu::{Model, Simulation};
@@ -104,7 +105,9 @@ fn rest_energy() -> f64 {
 
 /// Samples at t = 0, H, 2H, …, TIME (correction on, RK4).
 fn run(scene: &Scene) -> Vec<Sample> {
-    let model = Model::new(scene).unwrap();
+    let mut scene = scene.clone();
+    scene.solver.method = Method::Rk4;
+    let model = Model::new(&scene).unwrap();
     assert!(model.solver.correction);
     let mut sim = Simulation::new(model);
     let steps = (TIME / H).round() as u64;

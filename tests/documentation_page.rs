@@ -66,6 +66,7 @@ fn values_are_shown_by_name_with_variability() {
     // name, causality, variability, type, unit, start, meaning
     let method = row(&html, "solver.method");
     assert_eq!(method[2..6], ["Fixed", "Integer", "", "2 (dopri5)"]);
+    assert!(html.contains("dopri5 (rtol 1e-6, atol 1e-9), event location on, correction on"));
     let correction = row(&html, "solver.correction");
     assert_eq!(correction[3..6], ["Boolean", "", "true"]);
     let steps = row(&html, "solver.max_steps");

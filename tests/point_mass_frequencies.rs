@@ -15,6 +15,7 @@ use kkt_support::H;
 use point_mass_support::{cable_held_bar, scene_from, CABLE_BAR};
 use serde_json::json;
 use std::f64::consts::PI;
+use tensegrity_fmu::integrator::Method;
 use tensegrity_fmu::{Model, Scene, Simulation};
 
 /// Mean period of a sampled signal `(t, y)` oscillating about 0, from its zero crossings
@@ -38,10 +39,12 @@ fn mean_period(samples: &[(f64, f64)]) -> (f64, usize) {
     (2.0 * (crossings[n - 1] - crossings[0]) / (n - 1) as f64, n)
 }
 
-/// Runs `scene` for `time` at step `H` (RK4 with the correction, the scene default) and
-/// samples `probe` after every step.
+/// Runs `scene` for `time` at step `H` (RK4 with the correction) and samples `probe`
+/// after every step.
 fn sample(scene: &Scene, time: f64, probe: impl Fn(&Simulation) -> f64) -> Vec<(f64, f64)> {
-    let mut sim = Simulation::new(Model::new(scene).expect("scene builds"));
+    let mut scene = scene.clone();
+    scene.solver.method = Method::Rk4;
+    let mut sim = Simulation::new(Model::new(&scene).expect("scene builds"));
     assert!(
         !sim.warnings().iter().any(|w| w.contains("projected")),
         "the start velocities must satisfy the constraints: {:?}",

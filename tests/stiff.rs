@@ -10,7 +10,7 @@ use tensegrity_fmu::analysis;
 use tensegrity_fmu::dynamics::tangent::Tangent;
 use tensegrity_fmu::dynamics::{self, Inputs, Workspace};
 use tensegrity_fmu::integrator::Method;
-use tensegrity_fmu::scene::{builtin, LoadSpec, PrestressSpec, Scene, Start};
+use tensegrity_fmu::scene::{builtin, steel_prism_scene, LoadSpec, Scene};
 use tensegrity_fmu::sim::stability_limit;
 use tensegrity_fmu::Simulation;
 
@@ -102,29 +102,9 @@ fn max_difference(a: &[Vec<Vector3<f64>>], b: &[Vec<Vector3<f64>>]) -> f64 {
         .fold(0.0, f64::max)
 }
 
-/// The paper's prism with steel-stiff cables (κ = 1e7 N/m, 100 N prestress), settled under
-/// gravity, swayed by a slow 0.5 Hz load of 20 N on node 7.
-fn steel_prism() -> Scene {
-    let mut scene = builtin("prism2-elastic").unwrap();
-    scene.name = "steel prism".into();
-    for cable in &mut scene.cables {
-        cable.stiffness = Some(1e7);
-    }
-    scene.prestress = Some(PrestressSpec { min_tension: 100.0 });
-    scene.gravity = Some([0.0, 0.0, -9.81]);
-    scene.start = Start::Equilibrium;
-    scene.loads = vec![LoadSpec::Sinusoidal {
-        node: 7,
-        amplitude: [20.0, 0.0, 0.0],
-        frequency: 0.5,
-        phase: 0.0,
-    }];
-    scene
-}
-
 #[test]
 fn steel_cables_at_a_controller_step() {
-    let scene = steel_prism();
+    let scene = steel_prism_scene();
     let (reference, t_ref, _) = run(
         &with_method(scene.clone(), Method::Dopri5, 1e-4, 1e-11),
         2.0,

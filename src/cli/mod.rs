@@ -4,6 +4,7 @@ mod analyze;
 mod bench;
 mod bench_csv;
 mod bench_effects;
+mod bench_stiff;
 mod inputs;
 mod render;
 mod report;
@@ -161,6 +162,13 @@ enum BenchCommand {
         #[arg(long, default_value_t = 20)]
         repeats: usize,
     },
+    /// Steel-stiff cables (κ = 1e7 N/m) over 2 s: sdirk3 at 1 ms against dopri5 at
+    /// rtol 1e-6 and rk4 at its stability limit, each with its error and wall time.
+    Stiff {
+        /// Runs per method, interleaved; the fastest is printed.
+        #[arg(long, default_value_t = 5)]
+        repeats: usize,
+    },
 }
 
 /// Runs one command; errors come back as messages.
@@ -219,6 +227,10 @@ pub fn run(cli: Cli) -> Result<(), String> {
             what: Some(BenchCommand::Effects { seconds, repeats }),
             ..
         } => bench_effects::run(seconds, repeats),
+        Command::Bench {
+            what: Some(BenchCommand::Stiff { repeats }),
+            ..
+        } => bench_stiff::run(repeats),
         Command::Bench {
             what: None,
             stages,

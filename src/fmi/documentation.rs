@@ -93,9 +93,8 @@ pub fn index_html(sim: &Simulation, table: &VariableTable) -> String {
         h.push_str(&format!("<li>{}</li>", escape(&line)));
     }
     h.push_str(&format!(
-        "<li>internal step {} s, correction {}</li></ul>\n",
-        model.solver.step_size,
-        if model.solver.correction { "on" } else { "off" },
+        "<li>{}</li></ul>\n",
+        escape(&model.solver.summary())
     ));
     h.push_str(
         "<p>The structure at its start, in an interactive viewer (drag to orbit, wheel to \

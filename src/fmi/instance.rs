@@ -245,12 +245,11 @@ impl Instance {
         self.core.stale = true;
         let model = self.core.sim.model();
         let summary = format!(
-            "fmi2ExitInitializationMode: {} bars, {} cables, {} reduced coordinates, internal step {} s, correction {}",
+            "fmi2ExitInitializationMode: {} bars, {} cables, {} reduced coordinates, {}",
             model.bars.len(),
             model.cables.len(),
             model.coords.r,
-            self.core.scene.solver.step_size,
-            if self.core.sim.correction { "on" } else { "off" }
+            self.core.scene.solver.summary()
         );
         self.log(Category::Events, summary);
         Ok(Status::Ok)

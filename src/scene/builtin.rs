@@ -2,7 +2,7 @@
 //! and embedded here; `generate` rebuilds each from its formula, and a test holds the
 //! shipped files to it.
 
-use super::{BarSpec, CableControl, CableSpec, PrestressSpec, Scene, SolverSpec, Start};
+use super::{BarSpec, CableControl, CableSpec, LoadSpec, PrestressSpec, Scene, SolverSpec, Start};
 
 /// The default scene, built when no scene is named.
 pub const BUILTIN_DEFAULT: &str = "prism2";
@@ -190,4 +190,25 @@ fn icosahedron() -> Scene {
         start: Start::AsGiven,
         solver: SolverSpec::default(),
     }
+}
+
+/// The paper's prism with steel-stiff cables (κ = 1e7 N/m, 100 N prestress), settled
+/// under gravity (`start = "equilibrium"`) and swayed by a slow 0.5 Hz, 20 N load on node
+/// 7: the stiff method's benchmark and test case (`bench stiff`, tests/stiff.rs).
+pub fn steel_prism_scene() -> Scene {
+    let mut scene = builtin("prism2-elastic").expect("a built-in scene");
+    scene.name = "steel-prism".into();
+    for cable in &mut scene.cables {
+        cable.stiffness = Some(1e7);
+    }
+    scene.prestress = Some(PrestressSpec { min_tension: 100.0 });
+    scene.gravity = Some([0.0, 0.0, -9.81]);
+    scene.start = Start::Equilibrium;
+    scene.loads = vec![LoadSpec::Sinusoidal {
+        node: 7,
+        amplitude: [20.0, 0.0, 0.0],
+        frequency: 0.5,
+        phase: 0.0,
+    }];
+    scene
 }

@@ -7,7 +7,9 @@ mod builtin;
 pub mod limits;
 mod validate;
 
-pub use builtin::{builtin, builtin_names, generate, tower_scene, BUILTIN_DEFAULT};
+pub use builtin::{
+    builtin, builtin_names, generate, steel_prism_scene, tower_scene, BUILTIN_DEFAULT,
+};
 
 use serde::{Deserialize, Serialize};
 use std::path::Path;
@@ -293,6 +295,21 @@ pub struct SolverSpec {
 impl SolverSpec {
     /// Default of [`SolverSpec::max_steps`]: about 3 s of tower20 at 32 µs per step.
     pub const DEFAULT_MAX_STEPS: u64 = 100_000;
+
+    /// "dopri5 (rtol 1e-6, atol 1e-9), switches located, correction on" or "rk4, step
+    /// 0.001 s, …": the settings a run uses, for logs and documentation.
+    pub fn summary(&self) -> String {
+        let method = match self.method {
+            Method::Dopri5 => format!("dopri5 (rtol {:e}, atol {:e})", self.rtol, self.atol),
+            m => format!("{}, step {} s", m.name(), self.step_size),
+        };
+        let on = |b: bool| if b { "on" } else { "off" };
+        format!(
+            "{method}, event location {}, correction {}",
+            on(self.locate_events),
+            on(self.correction)
+        )
+    }
 }
 
 impl Default for SolverSpec {
