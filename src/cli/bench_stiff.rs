@@ -19,6 +19,9 @@ const HORIZON: f64 = 2.0;
 /// Sampling interval of the error, s.
 const SAMPLE: f64 = 0.01;
 
+/// Node positions at each sample time.
+type Samples = Vec<Vec<Vector3<f64>>>;
+
 struct Run {
     label: String,
     scene: Scene,
@@ -96,7 +99,7 @@ fn with(scene: &Scene, method: Method, step: f64, tol: f64) -> Scene {
 }
 
 /// Node positions every [`SAMPLE`] and the wall time of the integration, s.
-fn simulate(scene: &Scene) -> Result<(Vec<Vec<Vector3<f64>>>, f64), String> {
+fn simulate(scene: &Scene) -> Result<(Samples, f64), String> {
     let mut sim = Simulation::new(analysis::load(scene).map_err(|e| e.to_string())?);
     let mut samples = Vec::new();
     let mut seconds = 0.0;
@@ -114,7 +117,7 @@ fn simulate(scene: &Scene) -> Result<(Vec<Vec<Vector3<f64>>>, f64), String> {
     Ok((samples, seconds))
 }
 
-fn max_distance(a: &[Vec<Vector3<f64>>], b: &[Vec<Vector3<f64>>]) -> f64 {
+fn max_distance(a: &Samples, b: &Samples) -> f64 {
     a.iter()
         .zip(b)
         .flat_map(|(x, y)| x.iter().zip(y).map(|(p, q)| (p - q).norm()))
