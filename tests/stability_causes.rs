@@ -255,3 +255,40 @@ fn build_warns_once_that_the_fmu_will_refuse_its_own_settings() {
     assert!(ok, "{err}");
     assert!(!err.contains("stability limit"), "{err}");
 }
+
+/// A stable but too long rk4 step on steel-stiff cables is named as inaccurate, with the
+/// cables and the fixes; the step it names fixes it; a soft scene and the default (dopri5)
+/// say nothing; `simulate` warns once.
+#[test]
+fn a_stable_but_unresolving_step_is_named_with_its_fix() {
+    let mut scene = stiff_cables(None, 1e6);
+    scene.prestress = Some(tensegrity_fmu::scene::PrestressSpec { min_tension: 100.0 });
+    let inaccurate = |s: &Scene| Simulation::new(Model::new(s).unwrap()).accuracy_problem();
+    assert_eq!(problem(&scene), None, "1 ms is stable for 1e6 N/m cables");
+    let why = inaccurate(&scene).expect("1 ms cannot follow the cable mode");
+    println!("{why}");
+    assert!(
+        why.contains("stiffness 1e6 N/m") && why.contains("cables["),
+        "{why}"
+    );
+    assert!(why.contains("solver.method = \"dopri5\""), "{why}");
+    let mut fixed = scene.clone();
+    fixed.solver.step_size = value_after(&why, "or solver.step_size ≤ ");
+    assert_eq!(inaccurate(&fixed), None);
+    assert_eq!(inaccurate(&stiff_cables(None, 500.0)), None);
+    let mut adaptive = scene.clone();
+    adaptive.solver = Default::default();
+    assert_eq!(inaccurate(&adaptive), None);
+    let file = scene_file(&scene, "unresolved.toml");
+    let csv = temp("unresolved.csv");
+    let (ok, _, err) = run(&[
+        "simulate",
+        &file,
+        "--time",
+        "0.01",
+        "-o",
+        csv.to_str().unwrap(),
+    ]);
+    assert!(ok, "{err}");
+    assert_eq!(err.matches("too long to follow").count(), 1, "{err}");
+}

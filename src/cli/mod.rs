@@ -291,6 +291,9 @@ fn build(scene_arg: &str, output: Option<PathBuf>, binary: Option<PathBuf>) -> R
     if let Some(start) = built.start {
         eprintln!("{start}");
     }
+    if let Some(why) = &built.inaccurate {
+        eprintln!("warning: {why}");
+    }
     if let Some(why) = &built.unstable {
         eprintln!(
             "warning: at the scene's own settings and start inputs the FMU refuses fmi2DoStep \

@@ -85,6 +85,9 @@ pub fn simulate(scene: Scene, request: Request) -> Result<(), String> {
         }
         eprintln!("warning: {why}");
     }
+    if let Some(why) = sim.accuracy_problem() {
+        eprintln!("warning: {why}");
+    }
     let path = output.unwrap_or_else(|| PathBuf::from(format!("{}.csv", scene.name)));
     let (partial, file) = Partial::create(&path)?;
     let io = |e: std::io::Error| format!("writing {}: {e}", path.display());

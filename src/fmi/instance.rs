@@ -241,6 +241,11 @@ impl Instance {
                 Category::Warning,
                 format!("fmi2ExitInitializationMode: {why}"),
             );
+        } else if let Some(why) = self.core.sim.accuracy_problem() {
+            self.log(
+                Category::Warning,
+                format!("fmi2ExitInitializationMode: {why}"),
+            );
         }
         self.core.stale = true;
         let model = self.core.sim.model();

@@ -34,6 +34,8 @@ pub struct Built {
     /// Why the FMU, at the scene's own settings and start inputs, refuses its first
     /// `fmi2DoStep` (the stability guard's message), if it does.
     pub unstable: Option<String>,
+    /// Why the scene's own fixed step, though stable, cannot follow its fastest mode.
+    pub inaccurate: Option<String>,
 }
 
 /// The GUID placeholder of the golden modelDescription files (the real GUID hashes the
@@ -70,6 +72,7 @@ pub fn build_fmu(scene: &Scene, binary: &Path, out: &Path) -> Result<Built, Stri
         return Err(why);
     }
     let unstable = sim.stability_problem();
+    let inaccurate = sim.accuracy_problem();
     let table = VariableTable::new(&sim);
     let guid = guid_for(&scene_text);
     let description = model_description(sim.model(), &table, &Provenance::current(guid.clone()));
@@ -108,6 +111,7 @@ pub fn build_fmu(scene: &Scene, binary: &Path, out: &Path) -> Result<Built, Stri
         variables: table.variables.len(),
         start: sim.model().start,
         unstable,
+        inaccurate,
     })
 }
 

@@ -6,7 +6,7 @@
 //! Ground contact, usually inactive when the check runs, adds bounds of its own. Each rate
 //! names its cause (see [`super::cause`]), so the messages can name the key to change.
 
-use super::cause::{self, Rate};
+use super::cause::{self, Cause, Rate};
 use super::Simulation;
 use crate::dynamics;
 use crate::integrator::Method;
@@ -14,6 +14,11 @@ use crate::integrator::Method;
 /// Smallest sensible `h ω`: below it a step resolves a millionth of the fastest mode's
 /// period/2π, round-off dominates the truncation error, and runs take millions of steps.
 pub const MIN_STEP_PER_TIME_SCALE: f64 = 1e-6;
+
+/// Largest `h ω` at which an explicit fixed step still follows the fastest mode: rk4 then
+/// damps it by at most `(h ω)⁶/144` ≈ 0.7 % and shifts its phase by `(h ω)⁵/120` ≈ 0.8 %
+/// per step; beyond it that mode's share of the motion is lost.
+pub const RESOLVED_STEP_PER_TIME_SCALE: f64 = 1.0;
 
 /// Largest stable `h ω` on the imaginary axis: RK4 2√2; velocity Verlet 2.
 pub fn stability_limit(method: Method) -> Option<f64> {
@@ -152,6 +157,37 @@ impl Simulation {
                 0.1 / omega
             )
         })
+    }
+
+    /// `Some(message)` when an explicit fixed step is stable but too long to follow the
+    /// structure's fastest mode (`h ω` above [`RESOLVED_STEP_PER_TIME_SCALE`]): the run is
+    /// stable but inaccurate wherever that mode moves. Names the cause and the fixes.
+    pub fn accuracy_problem(&mut self) -> Option<String> {
+        let method = self.model.solver.method;
+        let limit = stability_limit(method)?;
+        let h = self.model.solver.step_size;
+        let rates = self.fastest_rates();
+        // Friction's regularisation is a decay, not an oscillation: a step need not follow
+        // it, only stay stable (the stability guard's part).
+        let fastest = rates.iter().find(|r| !matches!(r.cause, Cause::Friction))?;
+        let hw = h * fastest.omega;
+        // Above the limit the stability guard refuses the step instead.
+        if hw <= RESOLVED_STEP_PER_TIME_SCALE || h * rates[0].omega > limit {
+            return None;
+        }
+        Some(format!(
+            "solver.step_size = {h} s is stable with {} but too long to follow this scene's \
+             fastest mode (h ω = {hw:.2} > {RESOLVED_STEP_PER_TIME_SCALE}; ω ≈ {:.3e} 1/s from \
+             {}): the method damps and detunes that mode every step, so results are off \
+             wherever it moves (a sudden load, steel-stiff cables). For accuracy use \
+             solver.method = \"dopri5\" (the default: it keeps its error within rtol/atol), \
+             or solver.step_size ≤ {:.3e} s",
+            method.name(),
+            fastest.omega,
+            fastest.describe(&self.model, &self.inputs),
+            // Like the guard's fixes, 10 % inside the bound.
+            0.9 * RESOLVED_STEP_PER_TIME_SCALE / fastest.omega
+        ))
     }
 
     /// `Some(message)` when the fixed step exceeds the method's stability limit for the
