@@ -8,29 +8,31 @@
 
 use nalgebra::{DMatrix, DVector, Matrix3, Vector3};
 
-use super::block_cholesky::BlockCholesky;
+use super::block_cholesky::BlockLdl;
 use super::coords::Coordinates;
 use super::inertia::BarInertia;
 
 /// A constraint column touching a bar: (column, coefficient, end side 0/1).
 type Term = (usize, f64, usize);
 
-/// One bar's contribution to a 3 × 3 block of K.
+/// One bar's contribution to a 3 × 3 block of K: `coef (W_ij I − c_ij u uᵀ)`, with the
+/// constant scalars multiplied out once.
 #[derive(Debug, Clone)]
 struct Contribution {
     /// Sparse: index into the block values; dense: offset of the block's (0, 0) entry.
     slot: usize,
-    /// Product of the two constraint coefficients.
-    coef: f64,
-    /// End sides (0 = start, 1 = end) of the two terms.
-    sides: (usize, usize),
+    /// `coef · W_ij`, added to the diagonal (`coef` the product of the two constraint
+    /// coefficients, ±1 for joints and pins, so the products are exact).
+    diagonal: f64,
+    /// `coef · c_ij`, the factor of `−u uᵀ`.
+    along: f64,
 }
 
 /// How K is stored and solved.
 #[derive(Debug, Clone)]
 enum Solver {
     /// Block-sparse Cholesky with a fixed pattern: linear cost for banded structures.
-    Sparse(Box<BlockCholesky>),
+    Sparse(Box<BlockLdl>),
     /// Dense SVD with a rank cut: any P, including redundant or indeterminate ones.
     Dense(Vec<f64>),
 }
@@ -46,8 +48,9 @@ pub struct Reactions {
 }
 
 impl Reactions {
-    /// Lays out K for the constraint columns of `coords`.
-    pub fn new(coords: &Coordinates, n_bars: usize, dense: bool) -> Self {
+    /// Lays out K for the constraint columns of `coords` and the bars' `inertia`.
+    pub fn new(coords: &Coordinates, inertia: &[BarInertia], dense: bool) -> Self {
+        let n_bars = inertia.len();
         let nc = coords.constraints.len();
         let n = 3 * nc;
         // Per bar: the (column, coefficient, end side) terms that touch it.
@@ -74,7 +77,7 @@ impl Reactions {
                 .flat_map(&pairs)
                 .map(|(a, b)| (a.0, b.0))
                 .collect();
-            Solver::Sparse(Box::new(BlockCholesky::new(nc, &lower)))
+            Solver::Sparse(Box::new(BlockLdl::new(nc, &lower)))
         };
         let slot = |row: usize, col: usize| match &solver {
             Solver::Sparse(chol) => chol.k_index(row, col).expect("block is in the pattern"),
@@ -82,13 +85,18 @@ impl Reactions {
         };
         let per_bar = touching
             .iter()
-            .map(|t| {
+            .enumerate()
+            .map(|(bar, t)| {
                 pairs(t)
                     .into_iter()
-                    .map(|(a, b)| Contribution {
-                        slot: slot(a.0, b.0),
-                        coef: a.1 * b.1,
-                        sides: (a.2, b.2),
+                    .map(|(a, b)| {
+                        let coef = a.1 * b.1;
+                        let (w, c) = inertia[bar].compliance_scalars(a.2, b.2);
+                        Contribution {
+                            slot: slot(a.0, b.0),
+                            diagonal: w * coef,
+                            along: c * coef,
+                        }
                     })
                     .collect()
             })
@@ -106,8 +114,9 @@ impl Reactions {
         self.n
     }
 
-    /// Assembles K for the current bar directions `u_i = b_i/|b_i|` and inertias.
-    pub fn assemble(&mut self, units: &[Vector3<f64>], inertia: &[BarInertia]) {
+    /// Assembles K for the current bar directions `u_i = b_i/|b_i|` (the inertias were
+    /// folded into the contributions when K was laid out).
+    pub fn assemble(&mut self, units: &[Vector3<f64>]) {
         match &mut self.solver {
             Solver::Sparse(chol) => chol.k_values.iter_mut().for_each(|b| *b = Matrix3::zeros()),
             Solver::Dense(values) => values.iter_mut().for_each(|v| *v = 0.0),
@@ -118,19 +127,12 @@ impl Reactions {
             }
             let u = units[bar];
             let uu = u * u.transpose();
-            let blocks = [
-                [
-                    inertia[bar].compliance(0, 0, &uu),
-                    inertia[bar].compliance(0, 1, &uu),
-                ],
-                [
-                    inertia[bar].compliance(1, 0, &uu),
-                    inertia[bar].compliance(1, 1, &uu),
-                ],
-            ];
             for c in contributions {
                 // A uniform rod: same end (4I − 3uuᵀ)/m, opposite ends (−2I + 3uuᵀ)/m.
-                let block = blocks[c.sides.0][c.sides.1] * c.coef;
+                let mut block = uu * -c.along;
+                for k in 0..3 {
+                    block[(k, k)] += c.diagonal;
+                }
                 match &mut self.solver {
                     Solver::Sparse(chol) => chol.k_values[c.slot] += block,
                     Solver::Dense(values) => {
@@ -151,28 +153,27 @@ impl Reactions {
         if self.n == 0 {
             return true;
         }
-        let finite = match &self.solver {
-            Solver::Sparse(chol) => chol
-                .k_values
-                .iter()
-                .all(|b| b.iter().all(|x| x.is_finite())),
-            Solver::Dense(values) => values.iter().all(|x| x.is_finite()),
+        let factored = match &mut self.solver {
+            Solver::Sparse(chol) => chol.factor(),
+            Solver::Dense(_) => false,
         };
-        // Non-finite data would stall the factorisations; let the NaN reach the state
-        // check, which restores the last good point.
-        if !finite || !self.rhs.iter().all(|x| x.is_finite()) {
+        if factored {
+            if let Solver::Sparse(chol) = &self.solver {
+                chol.solve(&mut self.rhs);
+            }
+            return true;
+        }
+        // A NaN fails a pivot, so only a failed or dense solve scans: non-finite data would
+        // stall the SVD; let the NaN reach the state check, which restores the last good
+        // point.
+        if !self.finite() {
             self.rhs.fill(f64::NAN);
             return true;
         }
-        match &mut self.solver {
+        match &self.solver {
             Solver::Sparse(chol) => {
-                if chol.factor() {
-                    chol.solve(&mut self.rhs);
-                    true
-                } else {
-                    solve_dense(chol.dense(), &mut self.rhs);
-                    false
-                }
+                solve_dense(chol.dense(), &mut self.rhs);
+                false
             }
             Solver::Dense(values) => {
                 solve_dense(
@@ -182,6 +183,18 @@ impl Reactions {
                 true
             }
         }
+    }
+
+    /// Whether K and the right-hand side are finite.
+    fn finite(&self) -> bool {
+        let k = match &self.solver {
+            Solver::Sparse(chol) => chol
+                .k_values
+                .iter()
+                .all(|b| b.iter().all(|x| x.is_finite())),
+            Solver::Dense(values) => values.iter().all(|x| x.is_finite()),
+        };
+        k && self.rhs.iter().all(|x| x.is_finite())
     }
 }
 
