@@ -67,7 +67,6 @@ pub struct Workspace {
     pub lambda: Vec<f64>,
     /// Ground contact force per contact point (`Ground::nodes` order), N.
     pub contact_force: Vec<Vector3<f64>>,
-    units: Vec<Vector3<f64>>,
     /// Per bar, what λ needs besides the end forces: `(b, −|ḃ|², (β − α)|b|²)`, kept
     /// from the first λ pass for the second.
     bars: Vec<(Vector3<f64>, f64, f64)>,
@@ -103,7 +102,6 @@ impl Workspace {
                 Vector3::zeros();
                 model.ground.as_ref().map_or(0, |g| g.nodes.len())
             ],
-            units: vec![Vector3::zeros(); model.bars.len()],
             bars: vec![(Vector3::zeros(), 0.0, 1.0); model.bars.len()],
             reactions: model.reactions.clone(),
             dense_fallbacks: 0,
@@ -127,7 +125,7 @@ pub fn accelerations(
     for constraint in &model.pipeline.constraints {
         match constraint {
             effects::ConstraintEffect::JointsAndPins => {
-                add_reactions(model, ws);
+                add_reactions(ws);
                 bar_response_again(model, ws);
             }
         }
@@ -191,9 +189,13 @@ pub fn cable_force_density(
     }
 }
 
-/// Stage 3: λ in closed form and the end accelerations of every moving bar; also the bar
-/// directions for the reactions and what the second pass needs.
+/// Stage 3: λ in closed form and the end accelerations of every moving bar; also K of the
+/// reactions for the bar directions, and what the second pass needs.
 pub fn bar_response(model: &Model, ws: &mut Workspace) {
+    let with_reactions = !model.pipeline.constraints.is_empty();
+    if with_reactions {
+        ws.reactions.clear();
+    }
     for i in 0..model.bars.len() {
         let (a, b) = (2 * i, 2 * i + 1);
         if model.coords.static_bar[i] {
@@ -212,7 +214,9 @@ pub fn bar_response(model: &Model, ws: &mut Workspace) {
             (inertia.beta - inertia.alpha) * l2,
         );
         ws.bars[i] = cached;
-        ws.units[i] = bv / l2.sqrt();
+        if with_reactions {
+            ws.reactions.add_bar(i, &(bv / l2.sqrt()));
+        }
         respond(inertia, cached, ws, i);
     }
 }
@@ -246,30 +250,12 @@ fn respond(
     ws.end_acc[b] = ga * w[1][0] + gb * w[1][1];
 }
 
-/// Stage 4: reactions Ω from `N̈ P = 0`, added to the end forces.
-fn add_reactions(model: &Model, ws: &mut Workspace) {
-    let constraints = &model.coords.constraints;
-    for (c, col) in constraints.iter().enumerate() {
-        let mut r = Vector3::zeros();
-        for &(e, coef) in &col.terms {
-            r += ws.end_acc[e] * coef;
-        }
-        for k in 0..3 {
-            ws.reactions.rhs[3 * c + k] = -r[k];
-        }
-    }
-    ws.reactions.assemble(&ws.units);
+/// Stage 4: reactions Ω from `N̈ P = 0` (K assembled by [`bar_response`]), added to the end
+/// forces.
+fn add_reactions(ws: &mut Workspace) {
+    ws.reactions.set_rhs(&ws.end_acc);
     if !ws.reactions.solve() {
         ws.dense_fallbacks += 1;
     }
-    for (c, col) in constraints.iter().enumerate() {
-        let omega = Vector3::new(
-            ws.reactions.rhs[3 * c],
-            ws.reactions.rhs[3 * c + 1],
-            ws.reactions.rhs[3 * c + 2],
-        );
-        for &(e, coef) in &col.terms {
-            ws.end_force[e] += omega * coef;
-        }
-    }
+    ws.reactions.add_to(&mut ws.end_force);
 }

@@ -169,26 +169,22 @@ impl BlockLdl {
 
     /// Solves `K x = b` in place with the last successful factor.
     pub fn solve(&self, b: &mut DVector<f64>) {
-        let get = |b: &DVector<f64>, k: usize| Vector3::new(b[3 * k], b[3 * k + 1], b[3 * k + 2]);
-        let set = |b: &mut DVector<f64>, k: usize, v: Vector3<f64>| {
-            b[3 * k] = v.x;
-            b[3 * k + 1] = v.y;
-            b[3 * k + 2] = v.z;
-        };
+        let (b, _) = b.as_mut_slice().as_chunks_mut::<3>();
+        let b = &mut b[..self.n];
         for k in 0..self.n {
-            let y = get(b, k);
+            let y = Vector3::from(b[k]);
             for p in self.l_start[k] + 1..self.l_start[k + 1] {
                 let i = self.l_rows[p];
-                let bi = get(b, i) - self.l_values[p] * y;
-                set(b, i, bi);
+                let bi = Vector3::from(b[i]) - self.l_values[p] * y;
+                b[i] = bi.into();
             }
         }
         for k in (0..self.n).rev() {
-            let mut x = self.d_inv[k] * get(b, k);
+            let mut x = self.d_inv[k] * Vector3::from(b[k]);
             for p in self.l_start[k] + 1..self.l_start[k + 1] {
-                x -= self.l_values[p].tr_mul(&get(b, self.l_rows[p]));
+                x -= self.l_values[p].tr_mul(&Vector3::from(b[self.l_rows[p]]));
             }
-            set(b, k, x);
+            b[k] = x.into();
         }
     }
 

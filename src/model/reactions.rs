@@ -45,6 +45,10 @@ pub struct Reactions {
     solver: Solver,
     /// Right-hand side, then solution Ω (3 per constraint column).
     pub rhs: DVector<f64>,
+    /// The constraint columns' `(end, coefficient)` terms, flat, column c at
+    /// `term_start[c]..term_start[c + 1]`.
+    term_start: Vec<usize>,
+    terms: Vec<(usize, f64)>,
 }
 
 impl Reactions {
@@ -101,11 +105,19 @@ impl Reactions {
                     .collect()
             })
             .collect();
+        let mut term_start = vec![0];
+        let mut terms = Vec::new();
+        for col in &coords.constraints {
+            terms.extend_from_slice(&col.terms);
+            term_start.push(terms.len());
+        }
         Self {
             n,
             per_bar,
             solver,
             rhs: DVector::zeros(n),
+            term_start,
+            terms,
         }
     }
 
@@ -117,29 +129,63 @@ impl Reactions {
     /// Assembles K for the current bar directions `u_i = b_i/|b_i|` (the inertias were
     /// folded into the contributions when K was laid out).
     pub fn assemble(&mut self, units: &[Vector3<f64>]) {
-        match &mut self.solver {
-            Solver::Sparse(chol) => chol.k_values.iter_mut().for_each(|b| *b = Matrix3::zeros()),
-            Solver::Dense(values) => values.iter_mut().for_each(|v| *v = 0.0),
+        self.clear();
+        for (bar, u) in units.iter().enumerate() {
+            self.add_bar(bar, u);
         }
-        for (bar, contributions) in self.per_bar.iter().enumerate() {
-            if contributions.is_empty() {
-                continue;
+    }
+
+    /// Sets the right-hand side to `−N̈ P` for the end accelerations without reactions.
+    pub fn set_rhs(&mut self, end_acc: &[Vector3<f64>]) {
+        let (rhs, _) = self.rhs.as_mut_slice().as_chunks_mut::<3>();
+        for (c, r) in rhs.iter_mut().enumerate() {
+            let mut sum = Vector3::zeros();
+            for &(e, coef) in &self.terms[self.term_start[c]..self.term_start[c + 1]] {
+                sum += end_acc[e] * coef;
             }
-            let u = units[bar];
-            let uu = u * u.transpose();
-            for c in contributions {
-                // A uniform rod: same end (4I − 3uuᵀ)/m, opposite ends (−2I + 3uuᵀ)/m.
-                let mut block = uu * -c.along;
-                for k in 0..3 {
-                    block[(k, k)] += c.diagonal;
-                }
-                match &mut self.solver {
-                    Solver::Sparse(chol) => chol.k_values[c.slot] += block,
-                    Solver::Dense(values) => {
-                        for j in 0..3 {
-                            for i in 0..3 {
-                                values[c.slot + j * self.n + i] += block[(i, j)];
-                            }
+            *r = [-sum.x, -sum.y, -sum.z];
+        }
+    }
+
+    /// Adds the solved reactions `Ω P` to the end forces.
+    pub fn add_to(&self, end_force: &mut [Vector3<f64>]) {
+        let (omega, _) = self.rhs.as_slice().as_chunks::<3>();
+        for (c, o) in omega.iter().enumerate() {
+            let o = Vector3::from(*o);
+            for &(e, coef) in &self.terms[self.term_start[c]..self.term_start[c + 1]] {
+                end_force[e] += o * coef;
+            }
+        }
+    }
+
+    /// Zeroes K, before [`Self::add_bar`] for every bar.
+    pub fn clear(&mut self) {
+        match &mut self.solver {
+            Solver::Sparse(chol) => chol.k_values.fill(Matrix3::zeros()),
+            Solver::Dense(values) => values.fill(0.0),
+        }
+    }
+
+    /// Adds bar `bar`'s blocks to K for its direction `u`.
+    #[inline]
+    pub fn add_bar(&mut self, bar: usize, u: &Vector3<f64>) {
+        let contributions = &self.per_bar[bar];
+        if contributions.is_empty() {
+            return;
+        }
+        let uu = u * u.transpose();
+        for c in contributions {
+            // A uniform rod: same end (4I − 3uuᵀ)/m, opposite ends (−2I + 3uuᵀ)/m.
+            let mut block = uu * -c.along;
+            for k in 0..3 {
+                block[(k, k)] += c.diagonal;
+            }
+            match &mut self.solver {
+                Solver::Sparse(chol) => chol.k_values[c.slot] += block,
+                Solver::Dense(values) => {
+                    for j in 0..3 {
+                        for i in 0..3 {
+                            values[c.slot + j * self.n + i] += block[(i, j)];
                         }
                     }
                 }
