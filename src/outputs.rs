@@ -3,8 +3,6 @@
 
 use std::io::Write;
 
-use nalgebra::Vector3;
-
 pub use crate::scene::OutputGroup;
 use crate::sim::Simulation;
 
@@ -76,8 +74,8 @@ impl Quantity {
     /// velocities, at any time: they are read from the state).
     pub fn value(self, sim: &Simulation) -> f64 {
         match self {
-            Self::NodePosition(n, k) => node_from_state(sim, n, true)[k],
-            Self::NodeVelocity(n, k) => node_from_state(sim, n, false)[k],
+            Self::NodePosition(n, k) => node_from_state(sim, n, k, true),
+            Self::NodeVelocity(n, k) => node_from_state(sim, n, k, false),
             Self::CableTension(j) => sim.cable_tension(j),
             Self::BarForce(i) => sim.bar_force(i),
             Self::LengthError => sim.length_error(),
@@ -90,18 +88,28 @@ impl Quantity {
     }
 }
 
-/// Position (with `position`) or velocity of node `n` from the state, as the evaluation's
-/// kinematics computes it: the same arithmetic, so the same bits.
-fn node_from_state(sim: &Simulation, n: usize, position: bool) -> Vector3<f64> {
+/// Component `axis` of the position (with `position`) or velocity of node `n` from the
+/// state, as the evaluation's kinematics computes it: the same arithmetic, so the same bits.
+fn node_from_state(sim: &Simulation, n: usize, axis: usize, position: bool) -> f64 {
     let model = sim.model();
     let y = &sim.state().y;
-    let (q, v) = y.split_at(y.len() / 2);
-    match model.coords.node_end[n] {
-        Some(e) if position => model.coords.end_vector(e, q, true),
-        Some(e) => model.coords.end_vector(e, v, false),
+    let half = y.len() / 2;
+    let coords = &model.coords;
+    match coords.node_end[n] {
+        Some(e) => {
+            let (eta, mut x) = if position {
+                (&y[..half], coords.fixed[e][axis])
+            } else {
+                (&y[half..], 0.0)
+            };
+            for &(g, c) in coords.row(e) {
+                x += eta[3 * g + axis] * c;
+            }
+            x
+        }
         // A bar-less node is pinned: it stays where it starts.
-        None if position => model.positions[n],
-        None => Vector3::zeros(),
+        None if position => model.positions[n][axis],
+        None => 0.0,
     }
 }
 
