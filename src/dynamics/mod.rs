@@ -233,7 +233,7 @@ fn bar_response_again(model: &Model, ws: &mut Workspace) {
 
 /// λ of bar `i` (as [`crate::model::inertia::BarInertia::lambda`], with `b`, `−|ḃ|²` and
 /// its denominator given) and its end accelerations.
-#[inline]
+#[inline(always)]
 fn respond(
     inertia: &crate::model::inertia::BarInertia,
     (bv, minus_bdot2, den): (Vector3<f64>, f64, f64),

@@ -41,7 +41,9 @@ enum Solver {
 #[derive(Debug, Clone)]
 pub struct Reactions {
     n: usize,
-    per_bar: Vec<Vec<Contribution>>,
+    /// Bar i's contributions, flat: `contributions[bar_start[i]..bar_start[i + 1]]`.
+    bar_start: Vec<usize>,
+    contributions: Vec<Contribution>,
     solver: Solver,
     /// Right-hand side, then solution Ω (3 per constraint column).
     pub rhs: DVector<f64>,
@@ -87,24 +89,20 @@ impl Reactions {
             Solver::Sparse(chol) => chol.k_index(row, col).expect("block is in the pattern"),
             Solver::Dense(_) => 3 * col * n + 3 * row,
         };
-        let per_bar = touching
-            .iter()
-            .enumerate()
-            .map(|(bar, t)| {
-                pairs(t)
-                    .into_iter()
-                    .map(|(a, b)| {
-                        let coef = a.1 * b.1;
-                        let (w, c) = inertia[bar].compliance_scalars(a.2, b.2);
-                        Contribution {
-                            slot: slot(a.0, b.0),
-                            diagonal: w * coef,
-                            along: c * coef,
-                        }
-                    })
-                    .collect()
-            })
-            .collect();
+        let mut bar_start = vec![0];
+        let mut contributions = Vec::new();
+        for (bar, t) in touching.iter().enumerate() {
+            for (a, b) in pairs(t) {
+                let coef = a.1 * b.1;
+                let (w, c) = inertia[bar].compliance_scalars(a.2, b.2);
+                contributions.push(Contribution {
+                    slot: slot(a.0, b.0),
+                    diagonal: w * coef,
+                    along: c * coef,
+                });
+            }
+            bar_start.push(contributions.len());
+        }
         let mut term_start = vec![0];
         let mut terms = Vec::new();
         for col in &coords.constraints {
@@ -113,7 +111,8 @@ impl Reactions {
         }
         Self {
             n,
-            per_bar,
+            bar_start,
+            contributions,
             solver,
             rhs: DVector::zeros(n),
             term_start,
@@ -167,14 +166,14 @@ impl Reactions {
     }
 
     /// Adds bar `bar`'s blocks to K for its direction `u`.
-    #[inline]
+    #[inline(always)]
     pub fn add_bar(&mut self, bar: usize, u: &Vector3<f64>) {
-        let contributions = &self.per_bar[bar];
-        if contributions.is_empty() {
+        let (start, end) = (self.bar_start[bar], self.bar_start[bar + 1]);
+        if start == end {
             return;
         }
         let uu = u * u.transpose();
-        for c in contributions {
+        for c in &self.contributions[start..end] {
             // A uniform rod: same end (4I − 3uuᵀ)/m, opposite ends (−2I + 3uuᵀ)/m.
             let mut block = uu * -c.along;
             for k in 0..3 {
