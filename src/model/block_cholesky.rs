@@ -97,9 +97,9 @@ impl BlockLdl {
         let mut updates = Vec::new();
         for (k, entries) in rows_of.iter().enumerate() {
             for &(j, at) in entries {
-                for p in at..l_start[j + 1] {
+                for (p, &row) in l_rows.iter().enumerate().take(l_start[j + 1]).skip(at) {
                     updates.push(Update {
-                        target: l_slot(l_rows[p], k),
+                        target: l_slot(row, k),
                         source: p,
                         with: at,
                     });
