@@ -9,9 +9,10 @@
 //! - 2,000 `fmi2DoStep`s of 1 ms, each followed by `fmi2GetReal` of every node position;
 //! - the same with one cable tension read too (an output that needs an evaluation).
 
-use std::path::{Path, PathBuf};
-use std::process::Command;
 use std::time::Instant;
+
+mod fmu_support;
+use fmu_support::build_fmu;
 
 use fmi::fmi2::import::Fmi2Import;
 use fmi::fmi2::instance::{CoSimulation, Common, InstanceCS};
@@ -21,42 +22,6 @@ const SCENE: &str = "tower20";
 const H: f64 = 1e-3;
 const STEPS: usize = 2_000;
 const REPEATS: usize = 7;
-
-/// The generic FMU binary, built with cargo from the same sources as the CLI.
-fn fmu_binary() -> PathBuf {
-    let dir = Path::new(env!("CARGO_BIN_EXE_tensegrity-fmu"))
-        .parent()
-        .expect("the CLI has a directory")
-        .to_path_buf();
-    let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".to_owned());
-    let mut cmd = Command::new(cargo);
-    cmd.current_dir(env!("CARGO_MANIFEST_DIR"))
-        .args(["build", "-p", "tensegrity-fmu-binary", "--target-dir"])
-        .arg(dir.parent().expect("target directory"));
-    if dir.file_name().is_some_and(|n| n == "release") {
-        cmd.arg("--release");
-    }
-    assert!(cmd.status().expect("cargo build").success());
-    dir.join("libtensegrity_fmu_binary.so")
-}
-
-fn build_fmu(dir: &Path) -> PathBuf {
-    std::fs::create_dir_all(dir).expect("temporary directory");
-    let fmu = dir.join(format!("{SCENE}.fmu"));
-    let out = Command::new(env!("CARGO_BIN_EXE_tensegrity-fmu"))
-        .args(["build", SCENE, "-o"])
-        .arg(&fmu)
-        .arg("--binary")
-        .arg(fmu_binary())
-        .output()
-        .expect("run tensegrity-fmu build");
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    fmu
-}
 
 fn started(import: &Fmi2Import) -> InstanceCS {
     let mut inst = import
@@ -96,7 +61,7 @@ fn run(import: &Fmi2Import, reads: Option<&[u32]>) -> f64 {
 #[ignore = "a benchmark: run with --ignored --nocapture"]
 fn stepping_and_reading_every_position_costs_the_steps() {
     let dir = std::env::temp_dir().join(format!("tensegrity-fmu-bench-{}", std::process::id()));
-    let fmu = build_fmu(&dir);
+    let fmu = build_fmu(&dir, SCENE);
     let import: Fmi2Import = fmi::import::from_path(&fmu).expect("import the FMU");
     let md = import.model_description();
     let vr = |name: &str| {
