@@ -17,21 +17,16 @@ const SINGULAR: f64 = 1e-12;
 #[derive(Debug, Clone)]
 pub struct BlockLdl {
     n: usize,
-    /// Lower blocks of K by column; each column's first entry is its diagonal.
-    k_start: Vec<usize>,
-    k_rows: Vec<usize>,
-    /// Values of the lower blocks of K, filled by the caller.
+    /// K's lower blocks in L's layout (fill slots zero), set by the caller through
+    /// [`Self::k_index`]; the factorization overwrites them with the Schur complement's
+    /// blocks: `L_ik D_k` below the diagonal, for the updates of later columns, and `D_k` on
+    /// it. One array, so an evaluation streams K once (it matters for large structures).
     pub k_values: Vec<Matrix3<f64>>,
     /// Strictly lower blocks `L_ik` by column (with fill); each column's first slot, the
     /// identity, is unused.
     l_start: Vec<usize>,
     l_rows: Vec<usize>,
     l_values: Vec<Matrix3<f64>>,
-    /// The Schur complement's blocks in L's layout: `L_ik D_k` below the diagonal, for the
-    /// updates of later columns, and `D_k` on it.
-    ld_values: Vec<Matrix3<f64>>,
-    /// Slot in L's layout of each block of K.
-    k_to_l: Vec<usize>,
     /// The updates `S[target] −= L[source] (LD[with])ᵀ` of each column, `update_start[k]..`.
     update_start: Vec<usize>,
     updates: Vec<Update>,
@@ -79,7 +74,6 @@ impl BlockLdl {
             col.extend(rows);
             l_cols.push(col);
         }
-        let (k_start, k_rows) = flatten(&k_cols);
         let (l_start, l_rows) = flatten(&l_cols);
         let mut rows_of: Vec<Vec<(usize, usize)>> = vec![Vec::new(); n];
         for j in 0..n {
@@ -107,20 +101,12 @@ impl BlockLdl {
             }
             update_start.push(updates.len());
         }
-        let k_to_l = (0..n)
-            .flat_map(|c| (k_start[c]..k_start[c + 1]).map(move |p| (p, c)))
-            .map(|(p, c)| l_slot(k_rows[p], c))
-            .collect();
         Self {
             n,
-            k_values: vec![Matrix3::zeros(); k_rows.len()],
-            k_start,
-            k_rows,
+            k_values: vec![Matrix3::zeros(); l_rows.len()],
             l_values: vec![Matrix3::zeros(); l_rows.len()],
-            ld_values: vec![Matrix3::zeros(); l_rows.len()],
             l_start,
             l_rows,
-            k_to_l,
             update_start,
             updates,
             d_inv: vec![Matrix3::zeros(); n],
@@ -129,39 +115,31 @@ impl BlockLdl {
 
     /// Index into `k_values` of the lower block `(row, col)`, `row ≥ col`.
     pub fn k_index(&self, row: usize, col: usize) -> Option<usize> {
-        let range = self.k_start[col]..self.k_start[col + 1];
-        if row == col {
-            return Some(range.start);
-        }
-        let rows = &self.k_rows[range.start + 1..range.end];
-        rows.binary_search(&row).ok().map(|p| range.start + 1 + p)
+        let start = self.l_start[col];
+        let rows = &self.l_rows[start..self.l_start[col + 1]];
+        rows.binary_search(&row).ok().map(|p| start + p)
     }
 
-    /// Factors the current `k_values`; false if K is not (numerically) positive definite,
-    /// which includes any NaN in it (a NaN reaches a pivot, and fails its test).
+    /// Factors the current `k_values` (overwriting them); false if K is not (numerically)
+    /// positive definite, which includes any NaN in it (a NaN reaches a pivot, and fails
+    /// its test).
     pub fn factor(&mut self) -> bool {
         let scale = (0..self.n)
-            .map(|k| self.k_values[self.k_start[k]].diagonal().amax())
+            .map(|k| self.k_values[self.l_start[k]].diagonal().amax())
             .fold(0.0, f64::max);
         let tiny = SINGULAR * scale;
-        if self.k_to_l.len() < self.ld_values.len() {
-            self.ld_values.fill(Matrix3::zeros());
-        }
-        for (&slot, k) in self.k_to_l.iter().zip(&self.k_values) {
-            self.ld_values[slot] = *k;
-        }
         for k in 0..self.n {
             for u in &self.updates[self.update_start[k]..self.update_start[k + 1]] {
-                let delta = self.l_values[u.source] * self.ld_values[u.with].transpose();
-                self.ld_values[u.target] -= delta;
+                let delta = self.l_values[u.source] * self.k_values[u.with].transpose();
+                self.k_values[u.target] -= delta;
             }
             let (diagonal, end) = (self.l_start[k], self.l_start[k + 1]);
-            let Some(d_inv) = inverse3(&self.ld_values[diagonal], tiny) else {
+            let Some(d_inv) = inverse3(&self.k_values[diagonal], tiny) else {
                 return false;
             };
             self.d_inv[k] = d_inv;
             for p in diagonal + 1..end {
-                self.l_values[p] = self.ld_values[p] * d_inv;
+                self.l_values[p] = self.k_values[p] * d_inv;
             }
         }
         true
@@ -188,12 +166,13 @@ impl BlockLdl {
         }
     }
 
-    /// K as a dense symmetric matrix (for the indeterminate fallback).
+    /// K as a dense symmetric matrix (for the indeterminate fallback), from `k_values` as
+    /// set, before a factorization overwrites them.
     pub fn dense(&self) -> nalgebra::DMatrix<f64> {
         let mut m = nalgebra::DMatrix::zeros(3 * self.n, 3 * self.n);
         for c in 0..self.n {
-            for p in self.k_start[c]..self.k_start[c + 1] {
-                let r = self.k_rows[p];
+            for p in self.l_start[c]..self.l_start[c + 1] {
+                let r = self.l_rows[p];
                 let block = self.k_values[p];
                 m.fixed_view_mut::<3, 3>(3 * r, 3 * c).copy_from(&block);
                 if r != c {

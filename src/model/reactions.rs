@@ -51,6 +51,9 @@ pub struct Reactions {
     /// `term_start[c]..term_start[c + 1]`.
     term_start: Vec<usize>,
     terms: Vec<(usize, f64)>,
+    /// The bar directions K was last assembled for (to assemble it again after a failed
+    /// factorization, which overwrites it).
+    units: Vec<Vector3<f64>>,
 }
 
 impl Reactions {
@@ -117,6 +120,7 @@ impl Reactions {
             rhs: DVector::zeros(n),
             term_start,
             terms,
+            units: vec![Vector3::zeros(); n_bars],
         }
     }
 
@@ -172,6 +176,7 @@ impl Reactions {
         if start == end {
             return;
         }
+        self.units[bar] = *u;
         let uu = u * u.transpose();
         for c in &self.contributions[start..end] {
             // A uniform rod: same end (4I − 3uuᵀ)/m, opposite ends (−2I + 3uuᵀ)/m.
@@ -207,6 +212,14 @@ impl Reactions {
                 chol.solve(&mut self.rhs);
             }
             return true;
+        }
+        if matches!(self.solver, Solver::Sparse(_)) {
+            // The failed factorization overwrote K: assemble it again for the fallback.
+            self.clear();
+            for bar in 0..self.units.len() {
+                let u = self.units[bar];
+                self.add_bar(bar, &u);
+            }
         }
         // A NaN fails a pivot, so only a failed or dense solve scans: non-finite data would
         // stall the SVD; let the NaN reach the state check, which restores the last good
@@ -252,4 +265,56 @@ fn solve_dense(k: DMatrix<f64>, rhs: &mut DVector<f64>) {
     let tol = 1e-12 * svd.singular_values.max();
     let x = svd.solve(rhs, tol).expect("U and V were computed");
     rhs.copy_from(&x);
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::model::Model;
+    use crate::scene::Scene;
+
+    /// Ten bars between five nodes are a rigid frame with a self-stress: K is singular, the sparse factorization fails
+    /// (overwriting K) and the dense fallback must still see K as assembled, so its Ω is the
+    /// dense solver's.
+    #[test]
+    fn a_failed_factorization_falls_back_on_k_as_assembled() {
+        let scene = Scene::from_toml_str(
+            r#"
+            name = "frame"
+            nodes = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.1], [0.4, 0.9, 0.0], [0.5, 0.3, 0.8], [0.9, 0.8, 0.7]]
+            bars = [
+                { nodes = [1, 2], mass = 1.0 },
+                { nodes = [1, 3], mass = 2.0 },
+                { nodes = [1, 4], mass = 1.5 },
+                { nodes = [1, 5], mass = 1.0 },
+                { nodes = [2, 3], mass = 1.2 },
+                { nodes = [2, 4], mass = 0.8 },
+                { nodes = [2, 5], mass = 1.1 },
+                { nodes = [3, 4], mass = 0.9 },
+                { nodes = [3, 5], mass = 1.3 },
+                { nodes = [4, 5], mass = 1.4 },
+            ]
+            "#,
+        )
+        .unwrap();
+        let model = Model::new(&scene).unwrap();
+        let units: Vec<Vector3<f64>> = model
+            .bars
+            .iter()
+            .map(|b| (model.positions[b.nodes[1]] - model.positions[b.nodes[0]]) / b.length)
+            .collect();
+        let mut sparse = Reactions::new(&model.coords, &model.inertia, false);
+        let mut dense = Reactions::new(&model.coords, &model.inertia, true);
+        for r in [&mut sparse, &mut dense] {
+            r.assemble(&units);
+            r.rhs = DVector::from_fn(r.size(), |i, _| (i as f64 + 1.0).sin());
+        }
+        assert!(
+            !sparse.solve(),
+            "the sparse factorization fails on a rigid frame"
+        );
+        assert!(dense.solve());
+        let diff = (&sparse.rhs - &dense.rhs).amax();
+        assert!(diff <= 1e-12 * dense.rhs.amax(), "differ by {diff:e}");
+    }
 }
