@@ -63,11 +63,19 @@ impl Quantity {
 }
 
 impl Quantity {
-    /// Reads the value from a simulation whose outputs are fresh.
+    /// Whether reading it needs an evaluation at the current state ([`Simulation::refresh`]):
+    /// positions and velocities come straight from the state, everything else from forces,
+    /// λ or Ω.
+    pub fn needs_evaluation(self) -> bool {
+        !matches!(self, Self::NodePosition(..) | Self::NodeVelocity(..))
+    }
+
+    /// Reads the value from a simulation whose outputs are fresh (for positions and
+    /// velocities, at any time: they are read from the state).
     pub fn value(self, sim: &Simulation) -> f64 {
         match self {
-            Self::NodePosition(n, k) => sim.node_position(n)[k],
-            Self::NodeVelocity(n, k) => sim.node_velocity(n)[k],
+            Self::NodePosition(n, k) => node_from_state(sim, n, k, true),
+            Self::NodeVelocity(n, k) => node_from_state(sim, n, k, false),
             Self::CableTension(j) => sim.cable_tension(j),
             Self::BarForce(i) => sim.bar_force(i),
             Self::LengthError => sim.length_error(),
@@ -78,6 +86,36 @@ impl Quantity {
             Self::SupportReaction(k, axis) => sim.support_reaction(k)[axis],
         }
     }
+}
+
+/// Component `axis` of the position (with `position`) or velocity of node `n` from the
+/// state, as the evaluation's kinematics computes it: the same arithmetic, so the same bits.
+fn node_from_state(sim: &Simulation, n: usize, axis: usize, position: bool) -> f64 {
+    let model = sim.model();
+    let y = &sim.state().y;
+    let half = y.len() / 2;
+    let coords = &model.coords;
+    match coords.node_end[n] {
+        Some(e) => {
+            let (eta, mut x) = if position {
+                (&y[..half], coords.fixed[e][axis])
+            } else {
+                (&y[half..], 0.0)
+            };
+            for &(g, c) in coords.row(e) {
+                x += eta[3 * g + axis] * c;
+            }
+            x
+        }
+        // A bar-less node is pinned: it stays where it starts.
+        None if position => model.positions[n][axis],
+        None => 0.0,
+    }
+}
+
+/// Whether any output of `table` needs an evaluation ([`Quantity::needs_evaluation`]).
+pub fn needs_evaluation(table: &[Output]) -> bool {
+    table.iter().any(|o| o.quantity.needs_evaluation())
 }
 
 /// The outputs of a model, in a fixed order: the groups its scene selects (all by default).

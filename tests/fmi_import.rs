@@ -2,9 +2,11 @@
 //! archive loading, co-simulation instantiation, value references looked up by name in the
 //! parsed model description, and agreement with the library it wraps.
 
-use std::path::{Path, PathBuf};
-use std::process::Command;
+use std::path::Path;
 use std::sync::OnceLock;
+
+mod fmu_support;
+use fmu_support::build_fmu;
 
 use fmi::fmi2::import::Fmi2Import;
 use fmi::fmi2::instance::{CoSimulation, Common};
@@ -22,59 +24,6 @@ struct FmuRun {
     x_start: f64,
     x_end: f64,
     length_error: f64,
-}
-
-/// `target/<profile>`, the directory holding the CLI this test was built with.
-fn profile_dir() -> PathBuf {
-    Path::new(env!("CARGO_BIN_EXE_tensegrity-fmu"))
-        .parent()
-        .expect("the CLI binary has a parent directory")
-        .to_path_buf()
-}
-
-/// The generic FMU binary, (re)built with cargo: it must come from the same sources as the
-/// CLI, whose build id goes into the GUID that `fmi2Instantiate` checks. The build is a
-/// no-op when `cargo test --workspace` already built it.
-fn fmu_binary() -> PathBuf {
-    let dir = profile_dir();
-    let target_dir = dir.parent().expect("target directory");
-    let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".to_owned());
-    let mut cmd = Command::new(cargo);
-    cmd.current_dir(env!("CARGO_MANIFEST_DIR"))
-        .args(["build", "-p", "tensegrity-fmu-binary", "--target-dir"])
-        .arg(target_dir);
-    if dir.file_name().is_some_and(|n| n == "release") {
-        cmd.arg("--release");
-    }
-    let status = cmd.status().expect("run cargo build for the FMU binary");
-    assert!(
-        status.success(),
-        "cargo build -p tensegrity-fmu-binary failed"
-    );
-    let so = dir.join("libtensegrity_fmu_binary.so");
-    assert!(so.is_file(), "{} is missing after the build", so.display());
-    so
-}
-
-/// Packages the scene with the CLI into a fresh temporary directory.
-fn build_fmu(dir: &Path) -> PathBuf {
-    std::fs::create_dir_all(dir).expect("create the temporary directory");
-    let fmu = dir.join(format!("{SCENE}.fmu"));
-    let out = Command::new(env!("CARGO_BIN_EXE_tensegrity-fmu"))
-        .args(["build", SCENE, "-o"])
-        .arg(&fmu)
-        .arg("--binary")
-        .arg(fmu_binary())
-        .output()
-        .expect("run tensegrity-fmu build");
-    assert!(
-        out.status.success(),
-        "tensegrity-fmu build failed:\n{}{}",
-        String::from_utf8_lossy(&out.stdout),
-        String::from_utf8_lossy(&out.stderr)
-    );
-    assert!(fmu.is_file(), "{} was not written", fmu.display());
-    fmu
 }
 
 fn vr(import: &Fmi2Import, name: &str) -> u32 {
@@ -143,7 +92,7 @@ fn fmu_run() -> FmuRun {
                 .duration_since(std::time::UNIX_EPOCH)
                 .map_or(0, |d| d.as_nanos())
         ));
-        let fmu = build_fmu(&dir);
+        let fmu = build_fmu(&dir, SCENE);
         let run = run_fmu(&fmu);
         let _ = std::fs::remove_dir_all(&dir);
         run

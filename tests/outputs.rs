@@ -78,3 +78,49 @@ fn output_selection_is_validated() {
     let err = Scene::from_toml_str(&text).unwrap_err().to_string();
     assert!(err.contains("speeds"), "{err}");
 }
+
+/// Positions and velocities are read from the state without an evaluation (issue 14, item
+/// 2), and they are the very bits the evaluation's kinematics computes: for moving, pinned
+/// and bar-less nodes, in the sparse and the dense basis, mid-run.
+#[test]
+fn positions_and_velocities_from_the_state_are_the_evaluated_bits() {
+    use tensegrity_fmu::model::BasisKind;
+    for (name, basis) in [
+        ("tower20", BasisKind::Sparse),
+        ("prism2", BasisKind::Sparse),
+        ("prism2", BasisKind::Dense),
+        ("icosahedron", BasisKind::Sparse),
+    ] {
+        let mut sim = Simulation::new(Model::with_basis(&builtin(name).unwrap(), basis).unwrap());
+        if let Some(f) = sim.inputs.node_force.first_mut() {
+            f.x = 2.0;
+        }
+        sim.advance(25, 1e-3).unwrap();
+        let table = outputs(&sim);
+        let from_state: Vec<f64> = table
+            .iter()
+            .filter(|o| !o.quantity.needs_evaluation())
+            .map(|o| o.quantity.value(&sim))
+            .collect();
+        assert_eq!(from_state.len(), 6 * sim.model().n_nodes());
+        sim.refresh();
+        for (k, n) in (0..sim.model().n_nodes()).enumerate() {
+            for axis in 0..3 {
+                let (x, v) = (
+                    from_state[3 * k + axis],
+                    from_state[3 * (k + sim.model().n_nodes()) + axis],
+                );
+                assert_eq!(
+                    x.to_bits(),
+                    sim.node_position(n)[axis].to_bits(),
+                    "{name} node {n}"
+                );
+                assert_eq!(
+                    v.to_bits(),
+                    sim.node_velocity(n)[axis].to_bits(),
+                    "{name} node {n}"
+                );
+            }
+        }
+    }
+}

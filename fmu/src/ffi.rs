@@ -1,6 +1,7 @@
 //! Pointer-to-slice conversion and the logger bridge: the only `unsafe` helpers.
 
 use std::ffi::{CStr, CString};
+use std::fmt::Display;
 
 use fmi_sys::fmi2::*;
 use tensegrity_fmu::fmi::{Category, FmiError, Instance};
@@ -23,6 +24,10 @@ impl Component {
 
     /// Sends the instance's queued messages to the importer's logger.
     pub fn flush_log(&mut self) {
+        // Most calls log nothing: they must not pay for the copy of the name.
+        if !self.instance.has_messages() {
+            return;
+        }
         let name = self.instance.name().to_string();
         for m in self.instance.drain_messages() {
             let status = match m.category {
@@ -95,7 +100,7 @@ pub unsafe fn text(p: fmi2String) -> Option<String> {
 
 /// Refuses NULL for `n > 0`, and a count no array of `T` can have (it would abort the
 /// host, or be undefined behaviour, to treat it as one).
-fn check<T>(p: *const T, n: usize, what: &str) -> Result<(), FmiError> {
+fn check<T>(p: *const T, n: usize, what: impl Display) -> Result<(), FmiError> {
     if n > 0 && p.is_null() {
         return Err(FmiError::refused(format!(
             "{what} is NULL but {n} elements were passed"
@@ -111,7 +116,7 @@ fn check<T>(p: *const T, n: usize, what: &str) -> Result<(), FmiError> {
 }
 
 /// `n` elements at `p`; NULL is allowed only for `n == 0`.
-pub unsafe fn slice<'a, T>(p: *const T, n: usize, what: &str) -> Result<&'a [T], FmiError> {
+pub unsafe fn slice<'a, T>(p: *const T, n: usize, what: impl Display) -> Result<&'a [T], FmiError> {
     check(p, n, what)?;
     Ok(if n == 0 {
         &[]
@@ -121,7 +126,11 @@ pub unsafe fn slice<'a, T>(p: *const T, n: usize, what: &str) -> Result<&'a [T],
 }
 
 /// `n` writable elements at `p`; NULL is allowed only for `n == 0`.
-pub unsafe fn slice_mut<'a, T>(p: *mut T, n: usize, what: &str) -> Result<&'a mut [T], FmiError> {
+pub unsafe fn slice_mut<'a, T>(
+    p: *mut T,
+    n: usize,
+    what: impl Display,
+) -> Result<&'a mut [T], FmiError> {
     check(p, n, what)?;
     Ok(if n == 0 {
         &mut []
@@ -145,7 +154,8 @@ pub unsafe fn value_references<'a>(
              per variable of this FMU); pass the number of elements of vr"
         )));
     }
-    slice(vr, nvr, &format!("{call}: vr"))
+    // The label is formatted only into an error: a good call allocates nothing.
+    slice(vr, nvr, format_args!("{call}: vr"))
 }
 
 /// Repeats of a variable in one call beyond which `nvr` is taken for a mistake.

@@ -5,6 +5,8 @@
 #![allow(non_snake_case)]
 #![allow(clippy::missing_safety_doc)]
 
+#[cfg(test)]
+mod allocation_tests;
 mod ffi;
 mod guard;
 mod state;

@@ -11,8 +11,10 @@
 //!   kind of writer (kept here only to show the difference);
 //! - reading the row's values alone (what is left of a row without the formatting);
 //! - the `refresh` before each row (one evaluation at the row's state, so that tensions,
-//!   bar forces and reactions belong to it; the FMU does the same before returning
-//!   outputs).
+//!   bar forces and reactions belong to it; the FMU does the same before returning such
+//!   outputs, and neither evaluates for positions and velocities, read from the state);
+//! - a row of the node positions alone (a scene with `outputs = ["positions"]`), which
+//!   needs no refresh.
 
 use std::io::{BufWriter, Sink, Write};
 use std::time::Instant;
@@ -40,7 +42,8 @@ pub fn run(seconds: f64, repeats: usize) -> Result<(), String> {
     sim.refresh();
     let table = outputs::outputs(&sim);
     let mut w = BufWriter::new(std::io::sink());
-    let [step, row, old, refresh, values] = measure(&mut sim, &table, &mut w, seconds, repeats)?;
+    let [step, row, old, refresh, values, positions] =
+        measure(&mut sim, &table, &mut w, seconds, repeats)?;
     println!(
         "tower20 ({} columns), best of {repeats} interleaved measurements of ≥ {} s each:\n",
         table.len() + 1,
@@ -63,23 +66,34 @@ pub fn run(seconds: f64, repeats: usize) -> Result<(), String> {
             old,
         ),
         ("refresh before a row (one evaluation)", refresh),
+        (
+            "CSV row of the node positions alone (no refresh needed)",
+            positions,
+        ),
     ] {
         println!("| {what} | {us:.2} | {:.3} |", us / step);
     }
     Ok(())
 }
 
-/// Best µs per step, per row, per old-style row, per refresh and per reading of the values.
+/// Best µs per step, per row, per old-style row, per refresh, per reading of the values and
+/// per row of the positions alone.
 fn measure(
     sim: &mut Simulation,
     table: &[Output],
     w: &mut BufWriter<Sink>,
     seconds: f64,
     repeats: usize,
-) -> Result<[f64; 5], String> {
+) -> Result<[f64; 6], String> {
     let io = |e: std::io::Error| format!("writing the benchmark file: {e}");
-    let mut best = [f64::INFINITY; 5];
+    let mut best = [f64::INFINITY; 6];
     let mut rows = RowWriter::new(table);
+    let positions: Vec<Output> = table
+        .iter()
+        .filter(|o| o.quantity.group() == outputs::OutputGroup::Positions)
+        .cloned()
+        .collect();
+    let mut position_rows = RowWriter::new(&positions);
     let budget = seconds / repeats as f64;
     for _ in 0..repeats {
         let us = timed(budget, 10, |n| {
@@ -115,6 +129,13 @@ fn measure(
             Ok(())
         })?;
         best[4] = best[4].min(us);
+        let us = timed(budget, 100, |n| {
+            for _ in 0..n {
+                position_rows.write_row(w, &positions, sim).map_err(io)?;
+            }
+            Ok(())
+        })?;
+        best[5] = best[5].min(us);
     }
     w.flush().map_err(io)?;
     Ok(best)

@@ -95,9 +95,16 @@ pub fn simulate(scene: Scene, request: Request) -> Result<(), String> {
     outputs::write_header(&mut w, &table).map_err(io)?;
     let mut rows = outputs::RowWriter::new(&table);
     let warned = unstable.as_deref();
-    run(&mut sim, inputs.as_ref(), time, interval, warned, |sim| {
-        rows.write_row(&mut w, &table, sim).map_err(io)
-    })?;
+    let evaluate = outputs::needs_evaluation(&table);
+    run(
+        &mut sim,
+        inputs.as_ref(),
+        time,
+        interval,
+        warned,
+        evaluate,
+        |sim| rows.write_row(&mut w, &table, sim).map_err(io),
+    )?;
     drop(w.into_inner().map_err(|e| io(e.into_error()))?);
     partial.commit()?;
     println!("{}", path.display());
@@ -106,13 +113,16 @@ pub fn simulate(scene: Scene, request: Request) -> Result<(), String> {
 
 /// fmpy's co-simulation loop (`fmpy.simulation.simulateCS` with a variable communication
 /// step) from 0 to `stop`: `row` is called at 0, at every `k · interval` and at `stop`.
-/// A refusal that repeats the `warned` message says so instead of repeating it.
+/// A refusal that repeats the `warned` message says so instead of repeating it. With
+/// `evaluate`, each row is preceded by an evaluation at its state (see
+/// [`outputs::needs_evaluation`]).
 fn run(
     sim: &mut Simulation,
     inputs: Option<&InputTable>,
     stop: f64,
     interval: f64,
     warned: Option<&str>,
+    evaluate: bool,
     mut row: impl FnMut(&Simulation) -> Result<(), String>,
 ) -> Result<(), String> {
     if let Some(table) = inputs {
@@ -151,7 +161,11 @@ fn run(
             k += 1;
         }
         if on_grid || last {
-            sim.refresh();
+            // Positions and velocities are read from the state; only other outputs need
+            // an evaluation.
+            if evaluate {
+                sim.refresh();
+            }
             row(sim)?;
         }
     }

@@ -67,7 +67,9 @@ pub struct Workspace {
     pub lambda: Vec<f64>,
     /// Ground contact force per contact point (`Ground::nodes` order), N.
     pub contact_force: Vec<Vector3<f64>>,
-    units: Vec<Vector3<f64>>,
+    /// Per bar, what λ needs besides the end forces: `(b, −|ḃ|², (β − α)|b|²)`, kept
+    /// from the first λ pass for the second.
+    bars: Vec<(Vector3<f64>, f64, f64)>,
     reactions: Reactions,
     /// Evaluations where the sparse reaction factor failed and the dense solve was used.
     pub dense_fallbacks: u64,
@@ -100,7 +102,7 @@ impl Workspace {
                 Vector3::zeros();
                 model.ground.as_ref().map_or(0, |g| g.nodes.len())
             ],
-            units: vec![Vector3::zeros(); model.bars.len()],
+            bars: vec![(Vector3::zeros(), 0.0, 1.0); model.bars.len()],
             reactions: model.reactions.clone(),
             dense_fallbacks: 0,
         }
@@ -123,14 +125,20 @@ pub fn accelerations(
     for constraint in &model.pipeline.constraints {
         match constraint {
             effects::ConstraintEffect::JointsAndPins => {
-                add_reactions(model, ws);
-                bar_response(model, ws);
+                add_reactions(ws);
+                bar_response_again(model, ws);
             }
         }
     }
     acc.iter_mut().for_each(|a| *a = 0.0);
+    let coords = &model.coords;
     for (e, a) in ws.end_acc.iter().enumerate() {
-        model.coords.scatter(e, a, acc);
+        for &(g, c) in coords.row(e) {
+            let at = &mut acc[3 * g..3 * g + 3];
+            at[0] += c * a.x;
+            at[1] += c * a.y;
+            at[2] += c * a.z;
+        }
     }
 }
 
@@ -138,8 +146,14 @@ pub fn accelerations(
 pub fn kinematics(model: &Model, q: &[f64], v: &[f64], ws: &mut Workspace) {
     let coords = &model.coords;
     for e in 0..coords.n_ends() {
-        ws.end_pos[e] = coords.end_vector(e, q, true);
-        ws.end_vel[e] = coords.end_vector(e, v, false);
+        let mut x = coords.fixed[e];
+        let mut xdot = Vector3::zeros();
+        for &(g, c) in coords.row(e) {
+            x += Vector3::new(q[3 * g], q[3 * g + 1], q[3 * g + 2]) * c;
+            xdot += Vector3::new(v[3 * g], v[3 * g + 1], v[3 * g + 2]) * c;
+        }
+        ws.end_pos[e] = x;
+        ws.end_vel[e] = xdot;
     }
     for (n, end) in coords.node_end.iter().enumerate() {
         if let Some(e) = *end {
@@ -175,8 +189,13 @@ pub fn cable_force_density(
     }
 }
 
-/// Stage 3: λ in closed form and the end accelerations of every moving bar.
+/// Stage 3: λ in closed form and the end accelerations of every moving bar; also K of the
+/// reactions for the bar directions, and what the second pass needs.
 pub fn bar_response(model: &Model, ws: &mut Workspace) {
+    let with_reactions = !model.pipeline.constraints.is_empty();
+    if with_reactions {
+        ws.reactions.clear();
+    }
     for i in 0..model.bars.len() {
         let (a, b) = (2 * i, 2 * i + 1);
         if model.coords.static_bar[i] {
@@ -188,41 +207,55 @@ pub fn bar_response(model: &Model, ws: &mut Workspace) {
         let inertia = &model.inertia[i];
         let bv = ws.end_pos[b] - ws.end_pos[a];
         let bdot = ws.end_vel[b] - ws.end_vel[a];
-        let (fa, fb) = (ws.end_force[a], ws.end_force[b]);
-        let lambda = inertia.lambda(&bv, &bdot, &fa, &fb);
-        ws.lambda[i] = lambda;
-        ws.units[i] = bv.normalize();
-        let (ga, gb) = (fa - bv * lambda, fb + bv * lambda);
-        let w = &inertia.w;
-        ws.end_acc[a] = ga * w[0][0] + gb * w[0][1];
-        ws.end_acc[b] = ga * w[1][0] + gb * w[1][1];
+        let l2 = bv.norm_squared();
+        let cached = (
+            bv,
+            -bdot.norm_squared(),
+            (inertia.beta - inertia.alpha) * l2,
+        );
+        ws.bars[i] = cached;
+        if with_reactions {
+            ws.reactions.add_bar(i, &(bv / l2.sqrt()));
+        }
+        respond(inertia, cached, ws, i);
     }
 }
 
-/// Stage 4: reactions Ω from `N̈ P = 0`, added to the end forces.
-fn add_reactions(model: &Model, ws: &mut Workspace) {
-    let constraints = &model.coords.constraints;
-    for (c, col) in constraints.iter().enumerate() {
-        let mut r = Vector3::zeros();
-        for &(e, coef) in &col.terms {
-            r += ws.end_acc[e] * coef;
-        }
-        for k in 0..3 {
-            ws.reactions.rhs[3 * c + k] = -r[k];
+/// Stage 5: λ and the end accelerations again, for the end forces with the reactions,
+/// from what [`bar_response`] kept.
+fn bar_response_again(model: &Model, ws: &mut Workspace) {
+    for i in 0..model.bars.len() {
+        if !model.coords.static_bar[i] {
+            respond(&model.inertia[i], ws.bars[i], ws, i);
         }
     }
-    ws.reactions.assemble(&ws.units, &model.inertia);
+}
+
+/// λ of bar `i` (as [`crate::model::inertia::BarInertia::lambda`], with `b`, `−|ḃ|²` and
+/// its denominator given) and its end accelerations.
+#[inline(always)]
+fn respond(
+    inertia: &crate::model::inertia::BarInertia,
+    (bv, minus_bdot2, den): (Vector3<f64>, f64, f64),
+    ws: &mut Workspace,
+    i: usize,
+) {
+    let (a, b) = (2 * i, 2 * i + 1);
+    let (fa, fb) = (ws.end_force[a], ws.end_force[b]);
+    let lambda = (minus_bdot2 - bv.dot(&(fa * inertia.alpha + fb * inertia.beta))) / den;
+    ws.lambda[i] = lambda;
+    let (ga, gb) = (fa - bv * lambda, fb + bv * lambda);
+    let w = &inertia.w;
+    ws.end_acc[a] = ga * w[0][0] + gb * w[0][1];
+    ws.end_acc[b] = ga * w[1][0] + gb * w[1][1];
+}
+
+/// Stage 4: reactions Ω from `N̈ P = 0` (K assembled by [`bar_response`]), added to the end
+/// forces.
+fn add_reactions(ws: &mut Workspace) {
+    ws.reactions.set_rhs(&ws.end_acc);
     if !ws.reactions.solve() {
         ws.dense_fallbacks += 1;
     }
-    for (c, col) in constraints.iter().enumerate() {
-        let omega = Vector3::new(
-            ws.reactions.rhs[3 * c],
-            ws.reactions.rhs[3 * c + 1],
-            ws.reactions.rhs[3 * c + 2],
-        );
-        for &(e, coef) in &col.terms {
-            ws.end_force[e] += omega * coef;
-        }
-    }
+    ws.reactions.add_to(&mut ws.end_force);
 }

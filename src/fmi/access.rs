@@ -43,10 +43,16 @@ impl Instance {
                 Mode::Error,
             ],
         )?;
+        let mut evaluate = false;
         for &vr in vrs {
-            self.lookup(call, vr, base)?;
+            evaluate |= match self.lookup(call, vr, base)? {
+                Binding::Output(q) => q.needs_evaluation(),
+                _ => false,
+            };
         }
-        self.refresh_outputs(call)?;
+        // Positions, velocities, inputs and parameters need no evaluation: a step followed
+        // by reading them costs the step alone.
+        self.refresh_outputs(call, evaluate)?;
         for (k, &vr) in vrs.iter().enumerate() {
             let binding = self.lookup(call, vr, base)?;
             store(k, self.core.read(binding));
@@ -124,8 +130,12 @@ impl Instance {
                 Mode::StepComplete,
             ],
         )?;
+        let mut inputs_only = true;
         for &vr in vrs {
-            self.lookup(call, vr, base)?;
+            inputs_only &= is_input(self.lookup(call, vr, base)?);
+        }
+        if inputs_only {
+            return self.set_inputs(call, vrs, value);
         }
         let mut next = self.core.clone_for_set();
         let mut warnings = Vec::new();
@@ -143,10 +153,7 @@ impl Instance {
                     "{call}: {name} is an output and cannot be set"
                 )));
             }
-            let input = matches!(
-                binding,
-                Binding::ForceDensity(_) | Binding::NodeForce(..) | Binding::ReelInput(_)
-            );
+            let input = is_input(binding);
             let tunable = variable.variability == Variability::Tunable;
             if !input && !tunable && self.core.mode == Mode::StepComplete {
                 return Err(FmiError::refused(format!(
@@ -210,4 +217,63 @@ impl Instance {
         }
         Ok(status)
     }
+
+    /// [`Instance::set_each`] of inputs only, the call an importer makes every step: the
+    /// values are checked, then written in place, with nothing cloned or allocated (unless
+    /// a warning is logged).
+    fn set_inputs(&mut self, call: &str, vrs: &[u32], value: impl Fn(usize) -> f64) -> FmiResult {
+        for (k, &vr) in vrs.iter().enumerate() {
+            let value = value(k);
+            if !value.is_finite() {
+                let name = &self.core.table.variables[vr as usize].name;
+                return Err(FmiError::refused(format!(
+                    "{call}: {name} = {value} is not a finite number"
+                )));
+            }
+        }
+        let mut status = Status::Ok;
+        for (k, &vr) in vrs.iter().enumerate() {
+            let value = value(k);
+            let core = &mut self.core;
+            let inputs = &mut core.sim.inputs;
+            let negative = match core.table.variables[vr as usize].binding {
+                Binding::ForceDensity(k) => {
+                    inputs.force_density[k] = value;
+                    Some(k)
+                }
+                Binding::ReelInput(k) => {
+                    inputs.rest_length[k] = value;
+                    Some(core.sim.model().controlled.len() + k)
+                }
+                Binding::NodeForce(k, axis) => {
+                    inputs.node_force[k][axis] = value;
+                    None
+                }
+                _ => unreachable!("set_inputs is called with inputs only"),
+            };
+            core.stale = true;
+            let Some(flag) = negative.filter(|&f| value < 0.0 && !core.warned_negative[f]) else {
+                continue;
+            };
+            core.warned_negative[flag] = true;
+            let name = &core.table.variables[vr as usize].name;
+            let why = if flag < core.sim.model().controlled.len() {
+                "a cable cannot push, so it acts as 0"
+            } else {
+                "it acts as 0"
+            };
+            let text = format!("{call}: {name} = {value} is negative; {why} (warned once)");
+            self.log(Category::Warning, text);
+            status = Status::Warning;
+        }
+        Ok(status)
+    }
+}
+
+/// Whether a binding is an input (settable at any time before termination).
+fn is_input(binding: Binding) -> bool {
+    matches!(
+        binding,
+        Binding::ForceDensity(_) | Binding::NodeForce(..) | Binding::ReelInput(_)
+    )
 }

@@ -160,6 +160,11 @@ impl Instance {
         std::mem::take(&mut self.messages)
     }
 
+    /// Whether messages are queued (so a call that logged nothing costs nothing to flush).
+    pub fn has_messages(&self) -> bool {
+        !self.messages.is_empty()
+    }
+
     /// Queues a message if its category is enabled.
     pub fn log(&mut self, category: Category, text: impl Into<String>) {
         if self.logging[category as usize] {
@@ -310,9 +315,11 @@ impl Instance {
         Ok(())
     }
 
-    pub(super) fn refresh_outputs(&mut self, call: &str) -> FmiResult<()> {
+    /// Rebuilds the model if parameters changed and, with `evaluate`, evaluates at the
+    /// current state unless that was done since it last changed.
+    pub(super) fn refresh_outputs(&mut self, call: &str, evaluate: bool) -> FmiResult<()> {
         self.rebuild_if_needed(call)?;
-        if self.core.stale {
+        if evaluate && self.core.stale {
             self.core.sim.refresh();
             self.core.stale = false;
         }

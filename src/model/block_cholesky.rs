@@ -1,10 +1,12 @@
-//! Sparse Cholesky `K = L Lᵀ` over 3 × 3 blocks with a pattern fixed once.
+//! Sparse `K = L D Lᵀ` over 3 × 3 blocks with a pattern fixed once.
 //!
 //! The reaction matrix is made of dense 3 × 3 blocks (one per pair of constraint columns
 //! sharing a bar). A scalar sparse factorisation spends its time on index bookkeeping for
 //! every scalar; working on `Matrix3` blocks keeps the same fill but does the arithmetic on
-//! stack-allocated 3 × 3 matrices. The symbolic analysis (elimination tree and fill) runs
-//! once; `factor` and `solve` allocate nothing.
+//! stack-allocated 3 × 3 matrices. The factor is square-root free: `L` has identity
+//! diagonal blocks and `D` is block diagonal, kept as its inverse, whose three pivots cost
+//! one reciprocal each (no `sqrt → div` chain). The symbolic analysis (elimination tree
+//! and fill) runs once; `factor` and `solve` allocate nothing.
 
 use nalgebra::{DVector, Matrix3, Vector3};
 
@@ -13,26 +15,34 @@ const SINGULAR: f64 = 1e-12;
 
 /// A block-sparse symmetric positive-definite matrix and its factor.
 #[derive(Debug, Clone)]
-pub struct BlockCholesky {
+pub struct BlockLdl {
     n: usize,
-    /// Lower blocks of K by column; each column's first entry is its diagonal.
-    k_start: Vec<usize>,
-    k_rows: Vec<usize>,
-    /// Values of the lower blocks of K, filled by the caller.
+    /// K's lower blocks in L's layout (fill slots zero), set by the caller through
+    /// [`Self::k_index`]; the factorization overwrites them with the Schur complement's
+    /// blocks: `L_ik D_k` below the diagonal, for the updates of later columns, and `D_k` on
+    /// it. One array, so an evaluation streams K once (it matters for large structures).
     pub k_values: Vec<Matrix3<f64>>,
-    /// Blocks of L by column, same layout (with fill).
+    /// Strictly lower blocks `L_ik` by column (with fill); each column's first slot, the
+    /// identity, is unused.
     l_start: Vec<usize>,
     l_rows: Vec<usize>,
     l_values: Vec<Matrix3<f64>>,
-    /// Inverse of each diagonal block of L.
-    l_diag_inv: Vec<Matrix3<f64>>,
-    /// Row structure of L: for row k, the `l_values` indices of `L_kj`, j < k.
-    row_start: Vec<usize>,
-    row_entries: Vec<(usize, usize)>,
-    work: Vec<Matrix3<f64>>,
+    /// The updates `S[target] −= L[source] (LD[with])ᵀ` of each column, `update_start[k]..`.
+    update_start: Vec<usize>,
+    updates: Vec<Update>,
+    /// `D_k⁻¹`, symmetric.
+    d_inv: Vec<Matrix3<f64>>,
 }
 
-impl BlockCholesky {
+/// One block update of the factorization, as slots in L's layout.
+#[derive(Debug, Clone, Copy)]
+struct Update {
+    target: usize,
+    source: usize,
+    with: usize,
+}
+
+impl BlockLdl {
     /// Analyses the pattern of `n` block columns with the given lower blocks `(row, col)`,
     /// `row ≥ col`; every diagonal block is added.
     pub fn new(n: usize, lower_blocks: &[(usize, usize)]) -> Self {
@@ -64,7 +74,6 @@ impl BlockCholesky {
             col.extend(rows);
             l_cols.push(col);
         }
-        let (k_start, k_rows) = flatten(&k_cols);
         let (l_start, l_rows) = flatten(&l_cols);
         let mut rows_of: Vec<Vec<(usize, usize)>> = vec![Vec::new(); n];
         for j in 0..n {
@@ -72,58 +81,65 @@ impl BlockCholesky {
                 rows_of[l_rows[p]].push((j, p));
             }
         }
-        let (row_start, row_entries) = flatten(&rows_of);
+        // Column k of the Schur complement: K_ik − Σ_j L_ij (L_kj D_j)ᵀ over the j with
+        // L_kj ≠ 0, each a fixed slot once the pattern is known.
+        let l_slot = |row: usize, col: usize| {
+            let rows = &l_rows[l_start[col]..l_start[col + 1]];
+            l_start[col] + rows.binary_search(&row).expect("row is in L's pattern")
+        };
+        let mut update_start = vec![0];
+        let mut updates = Vec::new();
+        for (k, entries) in rows_of.iter().enumerate() {
+            for &(j, at) in entries {
+                for (p, &row) in l_rows.iter().enumerate().take(l_start[j + 1]).skip(at) {
+                    updates.push(Update {
+                        target: l_slot(row, k),
+                        source: p,
+                        with: at,
+                    });
+                }
+            }
+            update_start.push(updates.len());
+        }
         Self {
             n,
-            k_values: vec![Matrix3::zeros(); k_rows.len()],
-            k_start,
-            k_rows,
+            k_values: vec![Matrix3::zeros(); l_rows.len()],
             l_values: vec![Matrix3::zeros(); l_rows.len()],
             l_start,
             l_rows,
-            l_diag_inv: vec![Matrix3::zeros(); n],
-            row_start,
-            row_entries,
-            work: vec![Matrix3::zeros(); n],
+            update_start,
+            updates,
+            d_inv: vec![Matrix3::zeros(); n],
         }
     }
 
     /// Index into `k_values` of the lower block `(row, col)`, `row ≥ col`.
     pub fn k_index(&self, row: usize, col: usize) -> Option<usize> {
-        let range = self.k_start[col]..self.k_start[col + 1];
-        if row == col {
-            return Some(range.start);
-        }
-        let rows = &self.k_rows[range.start + 1..range.end];
-        rows.binary_search(&row).ok().map(|p| range.start + 1 + p)
+        let start = self.l_start[col];
+        let rows = &self.l_rows[start..self.l_start[col + 1]];
+        rows.binary_search(&row).ok().map(|p| start + p)
     }
 
-    /// Factors the current `k_values`; false if K is not (numerically) positive definite.
+    /// Factors the current `k_values` (overwriting them); false if K is not (numerically)
+    /// positive definite, which includes any NaN in it (a NaN reaches a pivot, and fails
+    /// its test).
     pub fn factor(&mut self) -> bool {
         let scale = (0..self.n)
-            .map(|k| self.k_values[self.k_start[k]].diagonal().amax())
+            .map(|k| self.k_values[self.l_start[k]].diagonal().amax())
             .fold(0.0, f64::max);
+        let tiny = SINGULAR * scale;
         for k in 0..self.n {
-            for p in self.l_start[k]..self.l_start[k + 1] {
-                self.work[self.l_rows[p]] = Matrix3::zeros();
+            for u in &self.updates[self.update_start[k]..self.update_start[k + 1]] {
+                let delta = self.l_values[u.source] * self.k_values[u.with].transpose();
+                self.k_values[u.target] -= delta;
             }
-            for p in self.k_start[k]..self.k_start[k + 1] {
-                self.work[self.k_rows[p]] = self.k_values[p];
-            }
-            for &(j, at) in &self.row_entries[self.row_start[k]..self.row_start[k + 1]] {
-                let l_kj_t = self.l_values[at].transpose();
-                for p in at..self.l_start[j + 1] {
-                    self.work[self.l_rows[p]] -= self.l_values[p] * l_kj_t;
-                }
-            }
-            let Some((l_kk, inv)) = cholesky3(&self.work[k], SINGULAR * scale) else {
+            let (diagonal, end) = (self.l_start[k], self.l_start[k + 1]);
+            let Some(d_inv) = inverse3(&self.k_values[diagonal], tiny) else {
                 return false;
             };
-            self.l_values[self.l_start[k]] = l_kk;
-            self.l_diag_inv[k] = inv;
-            let inv_t = inv.transpose();
-            for p in self.l_start[k] + 1..self.l_start[k + 1] {
-                self.l_values[p] = self.work[self.l_rows[p]] * inv_t;
+            self.d_inv[k] = d_inv;
+            for p in diagonal + 1..end {
+                self.l_values[p] = self.k_values[p] * d_inv;
             }
         }
         true
@@ -131,36 +147,32 @@ impl BlockCholesky {
 
     /// Solves `K x = b` in place with the last successful factor.
     pub fn solve(&self, b: &mut DVector<f64>) {
-        let get = |b: &DVector<f64>, k: usize| Vector3::new(b[3 * k], b[3 * k + 1], b[3 * k + 2]);
-        let set = |b: &mut DVector<f64>, k: usize, v: Vector3<f64>| {
-            b[3 * k] = v.x;
-            b[3 * k + 1] = v.y;
-            b[3 * k + 2] = v.z;
-        };
+        let (b, _) = b.as_mut_slice().as_chunks_mut::<3>();
+        let b = &mut b[..self.n];
         for k in 0..self.n {
-            let y = self.l_diag_inv[k] * get(b, k);
-            set(b, k, y);
+            let y = Vector3::from(b[k]);
             for p in self.l_start[k] + 1..self.l_start[k + 1] {
                 let i = self.l_rows[p];
-                let bi = get(b, i) - self.l_values[p] * y;
-                set(b, i, bi);
+                let bi = Vector3::from(b[i]) - self.l_values[p] * y;
+                b[i] = bi.into();
             }
         }
         for k in (0..self.n).rev() {
-            let mut x = get(b, k);
+            let mut x = self.d_inv[k] * Vector3::from(b[k]);
             for p in self.l_start[k] + 1..self.l_start[k + 1] {
-                x -= self.l_values[p].tr_mul(&get(b, self.l_rows[p]));
+                x -= self.l_values[p].tr_mul(&Vector3::from(b[self.l_rows[p]]));
             }
-            set(b, k, self.l_diag_inv[k].tr_mul(&x));
+            b[k] = x.into();
         }
     }
 
-    /// K as a dense symmetric matrix (for the indeterminate fallback).
+    /// K as a dense symmetric matrix (for the indeterminate fallback), from `k_values` as
+    /// set, before a factorization overwrites them.
     pub fn dense(&self) -> nalgebra::DMatrix<f64> {
         let mut m = nalgebra::DMatrix::zeros(3 * self.n, 3 * self.n);
         for c in 0..self.n {
-            for p in self.k_start[c]..self.k_start[c + 1] {
-                let r = self.k_rows[p];
+            for p in self.l_start[c]..self.l_start[c + 1] {
+                let r = self.l_rows[p];
                 let block = self.k_values[p];
                 m.fixed_view_mut::<3, 3>(3 * r, 3 * c).copy_from(&block);
                 if r != c {
@@ -173,34 +185,38 @@ impl BlockCholesky {
     }
 }
 
-/// `L` and `L⁻¹` of a symmetric 3 × 3 matrix, unrolled: nalgebra's generic routine was a
-/// seventh of a tower's step. `None` if a squared pivot is ≤ `tiny`.
+/// The inverse of a symmetric 3 × 3 matrix from its adjugate: one division, no square
+/// root. The pivots of its `L D Lᵀ` are `a₀₀`, `m₂/a₀₀` and `det/m₂` (`m₂` the leading 2 × 2
+/// minor), so they are tested against `tiny` without dividing. `None` if one is ≤ `tiny`
+/// (or NaN).
 #[inline]
-fn cholesky3(a: &Matrix3<f64>, tiny: f64) -> Option<(Matrix3<f64>, Matrix3<f64>)> {
-    let pivot = |d: f64| (d > tiny).then(|| d.sqrt());
-    let l00 = pivot(a[(0, 0)])?;
-    let l10 = a[(1, 0)] / l00;
-    let l20 = a[(2, 0)] / l00;
-    let l11 = pivot(a[(1, 1)] - l10 * l10)?;
-    let l21 = (a[(2, 1)] - l20 * l10) / l11;
-    let l22 = pivot(a[(2, 2)] - l20 * l20 - l21 * l21)?;
-    let (m00, m11, m22) = (1.0 / l00, 1.0 / l11, 1.0 / l22);
-    let m10 = -l10 * m00 * m11;
-    let m21 = -l21 * m11 * m22;
-    let m20 = -(l20 * m00 + l21 * m10) * m22;
-    #[rustfmt::skip]
-    let l = Matrix3::new(
-        l00, 0.0, 0.0,
-        l10, l11, 0.0,
-        l20, l21, l22,
+fn inverse3(a: &Matrix3<f64>, tiny: f64) -> Option<Matrix3<f64>> {
+    let (a00, a10, a20, a11, a21, a22) = (
+        a[(0, 0)],
+        a[(1, 0)],
+        a[(2, 0)],
+        a[(1, 1)],
+        a[(2, 1)],
+        a[(2, 2)],
     );
+    let c00 = a11 * a22 - a21 * a21;
+    let c10 = a20 * a21 - a10 * a22;
+    let c20 = a10 * a21 - a11 * a20;
+    let m2 = a00 * a11 - a10 * a10;
+    let det = a00 * c00 + a10 * c10 + a20 * c20;
+    if !(a00 > tiny && m2 > tiny * a00 && det > tiny * m2) {
+        return None;
+    }
+    let r = 1.0 / det;
+    let c11 = a00 * a22 - a20 * a20;
+    let c21 = a10 * a20 - a00 * a21;
     #[rustfmt::skip]
     let inv = Matrix3::new(
-        m00, 0.0, 0.0,
-        m10, m11, 0.0,
-        m20, m21, m22,
+        c00 * r, c10 * r, c20 * r,
+        c10 * r, c11 * r, c21 * r,
+        c20 * r, c21 * r, m2 * r,
     );
-    Some((l, inv))
+    Some(inv)
 }
 
 fn flatten<T: Copy>(lists: &[Vec<T>]) -> (Vec<usize>, Vec<T>) {
@@ -240,7 +256,7 @@ mod tests {
                 .wrapping_add(1442695040888963407);
             (seed >> 11) as f64 / (1u64 << 53) as f64 - 0.5
         };
-        let mut chol = BlockCholesky::new(n, &pattern);
+        let mut chol = BlockLdl::new(n, &pattern);
         for &(r, c) in pattern.iter() {
             let idx = chol.k_index(r, c).unwrap();
             chol.k_values[idx] = Matrix3::from_fn(|_, _| rand());
@@ -261,7 +277,7 @@ mod tests {
 
     #[test]
     fn singular_matrix_is_reported() {
-        let mut chol = BlockCholesky::new(2, &[(1, 0)]);
+        let mut chol = BlockLdl::new(2, &[(1, 0)]);
         let u = Vector3::new(1.0, 2.0, 2.0) / 3.0;
         let a = Matrix3::identity() * 4.0 - u * u.transpose() * 3.0;
         for (r, c, m) in [(0, 0, a), (1, 1, a), (1, 0, -a)] {

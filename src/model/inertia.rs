@@ -37,8 +37,15 @@ impl BarInertia {
     /// `W_ij I − k_i k_j /(β − α) u uᵀ` with `k = (α, β)`.
     #[inline]
     pub fn compliance(&self, i: usize, j: usize, uu: &Matrix3<f64>) -> Matrix3<f64> {
+        let (w, c) = self.compliance_scalars(i, j);
+        Matrix3::identity() * w - uu * c
+    }
+
+    /// The two scalars of [`Self::compliance`]: `(W_ij, k_i k_j /(β − α))`.
+    #[inline]
+    pub fn compliance_scalars(&self, i: usize, j: usize) -> (f64, f64) {
         let k = [self.alpha, self.beta];
-        Matrix3::identity() * self.w[i][j] - uu * (k[i] * k[j] / (self.beta - self.alpha))
+        (self.w[i][j], k[i] * k[j] / (self.beta - self.alpha))
     }
 
     /// λ (compression positive) for bar vector `b`, its rate `ḃ` and end forces `f_a`, `f_b`.

@@ -208,19 +208,19 @@ impl Model {
                 .collect();
             Ground::new(spec, contacts)
         });
-        let mut reactions = Reactions::new(&coords, bars.len(), basis == BasisKind::Dense);
+        let mut reactions = Reactions::new(&coords, &inertia, basis == BasisKind::Dense);
         let units: Vec<Vector3<f64>> = bars
             .iter()
             .map(|b| (positions[b.nodes[1]] - positions[b.nodes[0]]) / b.length)
             .collect();
-        reactions.assemble(&units, &inertia);
+        reactions.assemble(&units);
         if !reactions.solve() {
             warnings.push(
                 "the joint reactions are statically indeterminate (bars form a rigid frame); \
                  they use the minimum-norm dense solve, whose cost grows faster than linearly"
                     .to_string(),
             );
-            reactions = Reactions::new(&coords, bars.len(), true);
+            reactions = Reactions::new(&coords, &inertia, true);
         }
         let supports = Support::all(&coords, &pinned, &built.cables);
         let mut model = Self {

@@ -8,29 +8,31 @@
 
 use nalgebra::{DMatrix, DVector, Matrix3, Vector3};
 
-use super::block_cholesky::BlockCholesky;
+use super::block_cholesky::BlockLdl;
 use super::coords::Coordinates;
 use super::inertia::BarInertia;
 
 /// A constraint column touching a bar: (column, coefficient, end side 0/1).
 type Term = (usize, f64, usize);
 
-/// One bar's contribution to a 3 × 3 block of K.
+/// One bar's contribution to a 3 × 3 block of K: `coef (W_ij I − c_ij u uᵀ)`, with the
+/// constant scalars multiplied out once.
 #[derive(Debug, Clone)]
 struct Contribution {
     /// Sparse: index into the block values; dense: offset of the block's (0, 0) entry.
     slot: usize,
-    /// Product of the two constraint coefficients.
-    coef: f64,
-    /// End sides (0 = start, 1 = end) of the two terms.
-    sides: (usize, usize),
+    /// `coef · W_ij`, added to the diagonal (`coef` the product of the two constraint
+    /// coefficients, ±1 for joints and pins, so the products are exact).
+    diagonal: f64,
+    /// `coef · c_ij`, the factor of `−u uᵀ`.
+    along: f64,
 }
 
 /// How K is stored and solved.
 #[derive(Debug, Clone)]
 enum Solver {
     /// Block-sparse Cholesky with a fixed pattern: linear cost for banded structures.
-    Sparse(Box<BlockCholesky>),
+    Sparse(Box<BlockLdl>),
     /// Dense SVD with a rank cut: any P, including redundant or indeterminate ones.
     Dense(Vec<f64>),
 }
@@ -39,15 +41,25 @@ enum Solver {
 #[derive(Debug, Clone)]
 pub struct Reactions {
     n: usize,
-    per_bar: Vec<Vec<Contribution>>,
+    /// Bar i's contributions, flat: `contributions[bar_start[i]..bar_start[i + 1]]`.
+    bar_start: Vec<usize>,
+    contributions: Vec<Contribution>,
     solver: Solver,
     /// Right-hand side, then solution Ω (3 per constraint column).
     pub rhs: DVector<f64>,
+    /// The constraint columns' `(end, coefficient)` terms, flat, column c at
+    /// `term_start[c]..term_start[c + 1]`.
+    term_start: Vec<usize>,
+    terms: Vec<(usize, f64)>,
+    /// The bar directions K was last assembled for (to assemble it again after a failed
+    /// factorization, which overwrites it).
+    units: Vec<Vector3<f64>>,
 }
 
 impl Reactions {
-    /// Lays out K for the constraint columns of `coords`.
-    pub fn new(coords: &Coordinates, n_bars: usize, dense: bool) -> Self {
+    /// Lays out K for the constraint columns of `coords` and the bars' `inertia`.
+    pub fn new(coords: &Coordinates, inertia: &[BarInertia], dense: bool) -> Self {
+        let n_bars = inertia.len();
         let nc = coords.constraints.len();
         let n = 3 * nc;
         // Per bar: the (column, coefficient, end side) terms that touch it.
@@ -74,30 +86,41 @@ impl Reactions {
                 .flat_map(&pairs)
                 .map(|(a, b)| (a.0, b.0))
                 .collect();
-            Solver::Sparse(Box::new(BlockCholesky::new(nc, &lower)))
+            Solver::Sparse(Box::new(BlockLdl::new(nc, &lower)))
         };
         let slot = |row: usize, col: usize| match &solver {
             Solver::Sparse(chol) => chol.k_index(row, col).expect("block is in the pattern"),
             Solver::Dense(_) => 3 * col * n + 3 * row,
         };
-        let per_bar = touching
-            .iter()
-            .map(|t| {
-                pairs(t)
-                    .into_iter()
-                    .map(|(a, b)| Contribution {
-                        slot: slot(a.0, b.0),
-                        coef: a.1 * b.1,
-                        sides: (a.2, b.2),
-                    })
-                    .collect()
-            })
-            .collect();
+        let mut bar_start = vec![0];
+        let mut contributions = Vec::new();
+        for (bar, t) in touching.iter().enumerate() {
+            for (a, b) in pairs(t) {
+                let coef = a.1 * b.1;
+                let (w, c) = inertia[bar].compliance_scalars(a.2, b.2);
+                contributions.push(Contribution {
+                    slot: slot(a.0, b.0),
+                    diagonal: w * coef,
+                    along: c * coef,
+                });
+            }
+            bar_start.push(contributions.len());
+        }
+        let mut term_start = vec![0];
+        let mut terms = Vec::new();
+        for col in &coords.constraints {
+            terms.extend_from_slice(&col.terms);
+            term_start.push(terms.len());
+        }
         Self {
             n,
-            per_bar,
+            bar_start,
+            contributions,
             solver,
             rhs: DVector::zeros(n),
+            term_start,
+            terms,
+            units: vec![Vector3::zeros(); n_bars],
         }
     }
 
@@ -106,38 +129,67 @@ impl Reactions {
         self.n
     }
 
-    /// Assembles K for the current bar directions `u_i = b_i/|b_i|` and inertias.
-    pub fn assemble(&mut self, units: &[Vector3<f64>], inertia: &[BarInertia]) {
-        match &mut self.solver {
-            Solver::Sparse(chol) => chol.k_values.iter_mut().for_each(|b| *b = Matrix3::zeros()),
-            Solver::Dense(values) => values.iter_mut().for_each(|v| *v = 0.0),
+    /// Assembles K for the current bar directions `u_i = b_i/|b_i|` (the inertias were
+    /// folded into the contributions when K was laid out).
+    pub fn assemble(&mut self, units: &[Vector3<f64>]) {
+        self.clear();
+        for (bar, u) in units.iter().enumerate() {
+            self.add_bar(bar, u);
         }
-        for (bar, contributions) in self.per_bar.iter().enumerate() {
-            if contributions.is_empty() {
-                continue;
+    }
+
+    /// Sets the right-hand side to `−N̈ P` for the end accelerations without reactions.
+    pub fn set_rhs(&mut self, end_acc: &[Vector3<f64>]) {
+        let (rhs, _) = self.rhs.as_mut_slice().as_chunks_mut::<3>();
+        for (c, r) in rhs.iter_mut().enumerate() {
+            let mut sum = Vector3::zeros();
+            for &(e, coef) in &self.terms[self.term_start[c]..self.term_start[c + 1]] {
+                sum += end_acc[e] * coef;
             }
-            let u = units[bar];
-            let uu = u * u.transpose();
-            let blocks = [
-                [
-                    inertia[bar].compliance(0, 0, &uu),
-                    inertia[bar].compliance(0, 1, &uu),
-                ],
-                [
-                    inertia[bar].compliance(1, 0, &uu),
-                    inertia[bar].compliance(1, 1, &uu),
-                ],
-            ];
-            for c in contributions {
-                // A uniform rod: same end (4I − 3uuᵀ)/m, opposite ends (−2I + 3uuᵀ)/m.
-                let block = blocks[c.sides.0][c.sides.1] * c.coef;
-                match &mut self.solver {
-                    Solver::Sparse(chol) => chol.k_values[c.slot] += block,
-                    Solver::Dense(values) => {
-                        for j in 0..3 {
-                            for i in 0..3 {
-                                values[c.slot + j * self.n + i] += block[(i, j)];
-                            }
+            *r = [-sum.x, -sum.y, -sum.z];
+        }
+    }
+
+    /// Adds the solved reactions `Ω P` to the end forces.
+    pub fn add_to(&self, end_force: &mut [Vector3<f64>]) {
+        let (omega, _) = self.rhs.as_slice().as_chunks::<3>();
+        for (c, o) in omega.iter().enumerate() {
+            let o = Vector3::from(*o);
+            for &(e, coef) in &self.terms[self.term_start[c]..self.term_start[c + 1]] {
+                end_force[e] += o * coef;
+            }
+        }
+    }
+
+    /// Zeroes K, before [`Self::add_bar`] for every bar.
+    pub fn clear(&mut self) {
+        match &mut self.solver {
+            Solver::Sparse(chol) => chol.k_values.fill(Matrix3::zeros()),
+            Solver::Dense(values) => values.fill(0.0),
+        }
+    }
+
+    /// Adds bar `bar`'s blocks to K for its direction `u`.
+    #[inline(always)]
+    pub fn add_bar(&mut self, bar: usize, u: &Vector3<f64>) {
+        let (start, end) = (self.bar_start[bar], self.bar_start[bar + 1]);
+        if start == end {
+            return;
+        }
+        self.units[bar] = *u;
+        let uu = u * u.transpose();
+        for c in &self.contributions[start..end] {
+            // A uniform rod: same end (4I − 3uuᵀ)/m, opposite ends (−2I + 3uuᵀ)/m.
+            let mut block = uu * -c.along;
+            for k in 0..3 {
+                block[(k, k)] += c.diagonal;
+            }
+            match &mut self.solver {
+                Solver::Sparse(chol) => chol.k_values[c.slot] += block,
+                Solver::Dense(values) => {
+                    for j in 0..3 {
+                        for i in 0..3 {
+                            values[c.slot + j * self.n + i] += block[(i, j)];
                         }
                     }
                 }
@@ -151,28 +203,35 @@ impl Reactions {
         if self.n == 0 {
             return true;
         }
-        let finite = match &self.solver {
-            Solver::Sparse(chol) => chol
-                .k_values
-                .iter()
-                .all(|b| b.iter().all(|x| x.is_finite())),
-            Solver::Dense(values) => values.iter().all(|x| x.is_finite()),
+        let factored = match &mut self.solver {
+            Solver::Sparse(chol) => chol.factor(),
+            Solver::Dense(_) => false,
         };
-        // Non-finite data would stall the factorisations; let the NaN reach the state
-        // check, which restores the last good point.
-        if !finite || !self.rhs.iter().all(|x| x.is_finite()) {
+        if factored {
+            if let Solver::Sparse(chol) = &self.solver {
+                chol.solve(&mut self.rhs);
+            }
+            return true;
+        }
+        if matches!(self.solver, Solver::Sparse(_)) {
+            // The failed factorization overwrote K: assemble it again for the fallback.
+            self.clear();
+            for bar in 0..self.units.len() {
+                let u = self.units[bar];
+                self.add_bar(bar, &u);
+            }
+        }
+        // A NaN fails a pivot, so only a failed or dense solve scans: non-finite data would
+        // stall the SVD; let the NaN reach the state check, which restores the last good
+        // point.
+        if !self.finite() {
             self.rhs.fill(f64::NAN);
             return true;
         }
-        match &mut self.solver {
+        match &self.solver {
             Solver::Sparse(chol) => {
-                if chol.factor() {
-                    chol.solve(&mut self.rhs);
-                    true
-                } else {
-                    solve_dense(chol.dense(), &mut self.rhs);
-                    false
-                }
+                solve_dense(chol.dense(), &mut self.rhs);
+                false
             }
             Solver::Dense(values) => {
                 solve_dense(
@@ -182,6 +241,18 @@ impl Reactions {
                 true
             }
         }
+    }
+
+    /// Whether K and the right-hand side are finite.
+    fn finite(&self) -> bool {
+        let k = match &self.solver {
+            Solver::Sparse(chol) => chol
+                .k_values
+                .iter()
+                .all(|b| b.iter().all(|x| x.is_finite())),
+            Solver::Dense(values) => values.iter().all(|x| x.is_finite()),
+        };
+        k && self.rhs.iter().all(|x| x.is_finite())
     }
 }
 
@@ -194,4 +265,56 @@ fn solve_dense(k: DMatrix<f64>, rhs: &mut DVector<f64>) {
     let tol = 1e-12 * svd.singular_values.max();
     let x = svd.solve(rhs, tol).expect("U and V were computed");
     rhs.copy_from(&x);
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::model::Model;
+    use crate::scene::Scene;
+
+    /// Ten bars between five nodes are a rigid frame with a self-stress: K is singular, the sparse factorization fails
+    /// (overwriting K) and the dense fallback must still see K as assembled, so its Ω is the
+    /// dense solver's.
+    #[test]
+    fn a_failed_factorization_falls_back_on_k_as_assembled() {
+        let scene = Scene::from_toml_str(
+            r#"
+            name = "frame"
+            nodes = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.1], [0.4, 0.9, 0.0], [0.5, 0.3, 0.8], [0.9, 0.8, 0.7]]
+            bars = [
+                { nodes = [1, 2], mass = 1.0 },
+                { nodes = [1, 3], mass = 2.0 },
+                { nodes = [1, 4], mass = 1.5 },
+                { nodes = [1, 5], mass = 1.0 },
+                { nodes = [2, 3], mass = 1.2 },
+                { nodes = [2, 4], mass = 0.8 },
+                { nodes = [2, 5], mass = 1.1 },
+                { nodes = [3, 4], mass = 0.9 },
+                { nodes = [3, 5], mass = 1.3 },
+                { nodes = [4, 5], mass = 1.4 },
+            ]
+            "#,
+        )
+        .unwrap();
+        let model = Model::new(&scene).unwrap();
+        let units: Vec<Vector3<f64>> = model
+            .bars
+            .iter()
+            .map(|b| (model.positions[b.nodes[1]] - model.positions[b.nodes[0]]) / b.length)
+            .collect();
+        let mut sparse = Reactions::new(&model.coords, &model.inertia, false);
+        let mut dense = Reactions::new(&model.coords, &model.inertia, true);
+        for r in [&mut sparse, &mut dense] {
+            r.assemble(&units);
+            r.rhs = DVector::from_fn(r.size(), |i, _| (i as f64 + 1.0).sin());
+        }
+        assert!(
+            !sparse.solve(),
+            "the sparse factorization fails on a rigid frame"
+        );
+        assert!(dense.solve());
+        let diff = (&sparse.rhs - &dense.rhs).amax();
+        assert!(diff <= 1e-12 * dense.rhs.amax(), "differ by {diff:e}");
+    }
 }
