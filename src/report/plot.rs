@@ -109,10 +109,13 @@ pub(crate) fn work_precision(report: &Report, path: &Path) -> Result<(), String>
         })
         .collect();
     let all = || curves.iter().flat_map(|(_, p)| p.iter());
-    let (x0, x1) = decades(all().map(|p| p.1));
+    // Room on the right for the slowest point's label (half a decade).
+    let (x0, x1) = decades(all().map(|p| p.1).chain(all().map(|p| p.1 * 3.0)));
+    // A decade of headroom above the least accurate run keeps the legend off the curves.
     let (y0, y1) = decades(
         all()
             .map(|p| p.2)
+            .chain(all().map(|p| p.2 * 10.0))
             .chain([report.reference.max_difference_m]),
     );
     let root = BitMapBackend::new(path, SIZE).into_drawing_area();
@@ -163,7 +166,7 @@ pub(crate) fn work_precision(report: &Report, path: &Path) -> Result<(), String>
             BLACK.mix(0.6).stroke_width(2),
         ))
         .map_err(io(path))?
-        .label("reference convergence check (dopri5 1e-12 vs 1e-11)")
+        .label("reference check (1e-12 vs 1e-11)")
         .legend(|(x, y)| PathElement::new([(x, y), (x + 30, y)], BLACK.mix(0.6).stroke_width(2)));
     for (method, pts) in &curves {
         let c = colour(*method);
@@ -191,7 +194,8 @@ pub(crate) fn work_precision(report: &Report, path: &Path) -> Result<(), String>
             }))
             .map_err(io(path))?;
     }
-    draw_legend(&mut chart, SeriesLabelPosition::LowerLeft).map_err(io(path))?;
+    // Curves fall from upper left to lower right: the upper right stays clear.
+    draw_legend(&mut chart, SeriesLabelPosition::UpperRight).map_err(io(path))?;
     root.present().map_err(io(path))
 }
 
@@ -216,8 +220,8 @@ where
 
 fn setting_kind(method: Method) -> &'static str {
     match method {
-        Method::Dopri5 => "adaptive, labels: rtol = atol",
-        Method::Rk4 | Method::Rattle | Method::Sdirk3 => "fixed step, labels: step",
+        Method::Dopri5 => "labels: rtol = atol",
+        Method::Rk4 | Method::Rattle | Method::Sdirk3 => "labels: step",
     }
 }
 
