@@ -9,15 +9,10 @@ format is in the README ("Sweeps on Dask").
 """
 
 import argparse
-import copy
-import hashlib
 import io
-import json
 import logging
-import subprocess
 import sys
 import time
-import tomllib
 from pathlib import Path
 
 from distributed import Client, LocalCluster, as_completed
@@ -28,6 +23,7 @@ HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE))  # when imported from elsewhere (tests, the benchmark)
 
 import sweep_plot  # noqa: E402
+import sweep_scene  # noqa: E402
 import sweep_spec  # noqa: E402
 import sweep_worker  # noqa: E402
 from sweep_results import Results  # noqa: E402
@@ -35,66 +31,6 @@ from sweep_spec import SpecError  # noqa: E402
 
 CLI = HERE.parents[1] / "target" / "release" / "tensegrity-fmu"
 WORKER_WAIT = 60  # s for a remote scheduler to have a worker
-
-
-def scene_data(scene: str) -> dict:
-    """A scene file (TOML or JSON) or a built-in name (printed by `tensegrity-fmu scene`)."""
-    path = Path(scene)
-    if path.suffix == ".json":
-        return json.loads(path.read_text())
-    if path.suffix == ".toml":
-        return tomllib.loads(path.read_text())
-    res = subprocess.run([str(CLI), "scene", scene], capture_output=True, text=True)
-    if res.returncode != 0:
-        raise SpecError("scene", res.stderr.strip().removeprefix("error: "),
-                        "name a built-in scene (`tensegrity-fmu scene` lists them) or a .toml/.json file")
-    return tomllib.loads(res.stdout)
-
-
-def build_variants(spec, samples, out: Path):
-    """The FMU of each sample: spec.fmu, or the scene with the sample's scene_parameters,
-    built once per distinct variant into DIR/fmus/ (kept, so a resumed sweep rebuilds nothing).
-
-    Returns ({key: fmu bytes}, [key or build error per sample])."""
-    if spec.fmu:
-        if not spec.fmu.is_file():
-            raise SpecError("fmu", f"no such file {spec.fmu}", "give the path of a .fmu (relative to the spec)")
-        data = spec.fmu.read_bytes()
-        key = hashlib.sha256(data).hexdigest()[:16]
-        return {key: data}, [key] * len(samples)
-    base = scene_data(spec.scene)
-    (out / "fmus").mkdir(exist_ok=True)
-    archives, built, keys = {}, {}, []
-    for sample in samples:
-        values = sweep_spec.scene_values(spec, sample)
-        text = json.dumps(values, sort_keys=True)
-        if text not in built:
-            built[text] = _build(base, values, out / "fmus", archives)
-        keys.append(built[text])
-    return archives, keys
-
-
-def _build(base, values, folder, archives):
-    scene = copy.deepcopy(base)
-    for path, value in values.items():
-        sweep_spec.set_scene_key(scene, path, value)
-    text = json.dumps(scene, indent=1)
-    stem = f"{scene.get('name', 'scene')}-{hashlib.sha256(text.encode()).hexdigest()[:12]}"
-    fmu = folder / f"{stem}.fmu"
-    if not fmu.is_file():
-        (folder / f"{stem}.json").write_text(text)
-        res = subprocess.run([str(CLI), "build", str(folder / f"{stem}.json"), "-o", str(fmu)],
-                             capture_output=True, text=True)
-        if res.returncode != 0:  # this variant's samples become error rows
-            return BuildError(res.stderr.strip().removeprefix("error: "))
-    data = fmu.read_bytes()
-    key = hashlib.sha256(data).hexdigest()[:16]
-    archives[key] = data
-    return key
-
-
-class BuildError(str):
-    """The CLI's message for a scene variant it refused to build."""
 
 
 def connect(workers, scheduler):
@@ -118,7 +54,7 @@ def run(spec_path, out, workers=2, scheduler=None, resume=False, log=print):
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     samples = sweep_spec.samples(spec)
-    archives, keys = build_variants(spec, samples, out)
+    archives, keys = sweep_scene.build_variants(spec, samples, out, CLI)
     if not archives:
         raise SpecError("scene_parameters", f"no variant of the scene could be built ({keys[0]})", "fix the values")
     # The variants differ in values only, so any one's variables stand for all.
@@ -156,7 +92,7 @@ def _run_on(client, spec, samples, keys, archives, todo, results):
     futures, instances, ok = {}, set(), 0
     for index in todo:
         key = keys[index]
-        if isinstance(key, BuildError):
+        if isinstance(key, sweep_scene.BuildError):
             results.write(index, samples[index], f"build failed: {key}", {})
             continue
         values = sweep_spec.fmu_values(spec, samples[index])

@@ -195,52 +195,6 @@ def _check_settable(key, v, values, warm_start):
                              "Boolean": "write true or false"}[v.type])
 
 
-_SEGMENT = re.compile(r"([A-Za-z_]\w*)(?:\[(\d+|\*)\])?\Z")
-
-
-def set_scene_key(scene: dict, path: str, value):
-    """Sets `prestress.min_tension` or `cables[*].stiffness` (indices from 1, as scene errors
-    and FMU names count) in a parsed scene; the key must already be in the scene."""
-    key = f'scene_parameters."{path}"'
-    targets = [scene]
-    segments = path.split(".")
-    for depth, segment in enumerate(segments):
-        m = _SEGMENT.match(segment)
-        if not m:
-            raise SpecError(key, f"{segment!r} is no scene key", "write keys like prestress.min_tension or cables[*].stiffness")
-        name, index = m.groups()
-        last = depth == len(segments) - 1 and index is None
-        nxt = []
-        for node in targets:
-            if not isinstance(node, dict) or name not in node:
-                raise SpecError(key, f"the scene has no key {name!r} there",
-                                "add the key to the scene file with a start value, or fix its spelling")
-            if last:
-                _set_leaf(key, node, name, value)
-            elif index is None:
-                nxt.append(node[name])
-            elif not isinstance(node[name], list):
-                raise SpecError(key, f"{name} is no list", f"drop the [{index}]")
-            elif index == "*":
-                nxt.extend(node[name])
-            elif not 1 <= int(index) <= len(node[name]):
-                raise SpecError(key, f"{name} has {len(node[name])} entries, counted from 1", f"use an index from 1 to {len(node[name])}")
-            else:
-                nxt.append(node[name][int(index) - 1])
-        targets = nxt
-    if targets:
-        raise SpecError(key, "names a table, not a value", "name a value inside it, e.g. prestress.min_tension")
-
-
-def _set_leaf(key, node, name, value):
-    old = node[name]
-    numbers = (int, float)
-    same = isinstance(value, numbers) == isinstance(old, numbers) and isinstance(value, bool) == isinstance(old, bool)
-    if not same or isinstance(old, (dict, list)) != isinstance(value, (dict, list)):
-        raise SpecError(key, f"the scene holds {old!r} there, got {value!r}", "give values of the same kind")
-    node[name] = value
-
-
 def samples(spec: Spec) -> list:
     """Every sample as {column: value}, in a fixed order: the grid's product in the order
     the spec lists the names, or n random draws (seeded) with the held values."""

@@ -209,3 +209,58 @@ def test_missing_and_mistyped_top_level_keys(elastic, tmp_path):
     assert code == 2 and "stop_time: missing" in err and "write stop_time = " in err
     code, _, err = sweep(tmp_path, f'fmu = "{elastic.path}"\nstop_time = 1\nstep = "fast"\noutputs = ["node[7].x"]\n')
     assert code == 2 and "step: must be a number, got 'fast'" in err and "Traceback" not in err
+
+
+def test_scene_parameters_build_one_fmu_per_variant(elastic, fmus, tmp_path):
+    """Prestress and stiffness are scene keys (the rest lengths follow from both): each
+    combination is built into its own FMU and equals the FMU built from the edited scene."""
+    scene = tmp_path / "prism.toml"
+    scene.write_text(elastic.scene_text)
+    body = ('[scene_parameters]\n"prestress.min_tension" = [5.0, 20.0]\n"cables[*].stiffness" = [300.0, 600.0]\n'
+            '[parameters]\n"node[7].fx" = [2.0]\n')
+    spec = f'scene = "prism.toml"\nstop_time = 0.2\nstep = 0.01\noutputs = {OUTPUTS!r}\n'.replace("'", '"') + body
+    code, out, err = sweep(tmp_path, spec, "--workers", "2")
+    assert code == 0, err
+    got = rows(tmp_path)
+    assert len(got) == 4 and len(list((tmp_path / "out" / "fmus").glob("*.fmu"))) == 4
+    final = {}
+    for r in got:
+        assert r["status"] == "ok"
+        text = elastic.scene_text.replace("min_tension = 10.0", f"min_tension = {r['prestress.min_tension']}")
+        text = text.replace("stiffness = 500.0", f"stiffness = {r['cables[*].stiffness']}")
+        edited = tmp_path / f"edited-{r['sample']}.toml"
+        edited.write_text(text)
+        fmu = fmus.build(str(edited), tmp_path / f"edited-{r['sample']}.fmu")
+        expected = serial(fmu, {"node[7].fx": 2.0}, 0.2, 0.01)
+        assert {k: float(r[k]) for k in expected} == expected  # bit for bit
+        final[r["prestress.min_tension"], r["cables[*].stiffness"]] = float(r["cable[1].tension.min"])
+    # the prestress sets the tensions, whatever the stiffness
+    assert final["20.0", "300.0"] / final["5.0", "300.0"] == pytest.approx(4.0, rel=0.05)
+
+
+def test_warm_start_runs_every_sample_from_one_settled_state(fmus, open_fmu, tmp_path):
+    """warm_start = 0.5: the structure sags under gravity for 0.5 s once, and each sample
+    goes on from that state with its own load, as one uninterrupted run would."""
+    sagging = fmus.from_toml("gravity = [0.0, 0.0, -9.81]\n" + fmus.builtin("prism2-elastic").scene_text)
+    body = 'warm_start = 0.5\n[parameters]\n"node[7].fx" = [0.0, 4.0]\n'
+    code, out, err = sweep(tmp_path, spec_for(sagging.path, body, stop_time=0.2), "--workers", "2")
+    assert code == 0, err
+    for r in rows(tmp_path):
+        assert r["status"] == "ok"
+        ref = open_fmu(sagging, name=f"ref{r['sample']}").init()
+        points = [k * 0.01 for k in range(51)]
+        for t, t_next in zip(points, points[1:]):
+            ref.fmu.doStep(t, t_next - t)
+        z_settled = ref.get(["node[7].z"])[0]
+        ref.set({"node[7].fx": float(r["node[7].fx"])})
+        seen = [ref.get(OUTPUTS)]
+        points = [points[-1] + k * 0.01 for k in range(21)]
+        for t, t_next in zip(points, points[1:]):
+            ref.fmu.doStep(t, t_next - t)
+            seen.append(ref.get(OUTPUTS))
+        seen = np.array(seen)
+        for i, o in enumerate(OUTPUTS):
+            assert [float(r[f"{o}.{s}"]) for s in ("final", "min", "max")] == [
+                seen[-1, i], seen[:, i].min(), seen[:, i].max()]  # bit for bit
+        # the settled state is not the scene's start: gravity has moved the top
+        assert abs(z_settled - sagging.scene["nodes"][6][2]) > 1e-3
