@@ -75,7 +75,7 @@ def run(spec_path, out, workers=2, scheduler=None, resume=False, log=print):
     sweep_plot.summary(out / "results.csv", spec.swept(), spec.outputs, out / "summary.png")
     log(f"{stats['ran']} samples run ({stats['ok']} ok, {stats['ran'] - stats['ok']} failed) "
         f"in {stats['seconds']:.2f} s: {stats['ran'] / max(stats['seconds'], 1e-9):.2f} samples/s "
-        f"on {stats['workers']} workers, {stats['instances']} FMU instances")
+        f"on {stats['workers']} worker{'s' * (stats['workers'] != 1)}, {stats['instances']} FMU instances")
     log(f"wrote {out / 'results.csv'} and {out / 'summary.png'}")
     return stats
 
