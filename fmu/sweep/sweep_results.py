@@ -30,7 +30,8 @@ class Results:
         self.path, self.swept, self.outputs = path, swept, outputs
         self.header = header(swept, outputs)
         self.done = set()
-        if path.exists() and not resume:
+        # A header alone (a sweep stopped before its first row) holds nothing to lose.
+        if path.exists() and path.read_bytes().count(b"\n") > 1 and not resume:
             raise SpecError(str(path), "already holds results",
                             "run again with --resume to finish them, or choose another -o")
         if path.exists():

@@ -23,6 +23,7 @@ REPO = Path(__file__).resolve().parents[2]
 SWEEP = REPO / "fmu" / "sweep" / "sweep.py"
 sys.path.insert(0, str(SWEEP.parent))
 import sweep_spec  # noqa: E402
+from sweep import main as sweep_main  # noqa: E402
 
 OUTPUTS = ["node[7].x", "cable[1].tension"]
 
@@ -119,7 +120,7 @@ def test_an_invalid_value_is_an_error_row_and_the_rest_complete(elastic, tmp_pat
     assert "4 samples run (3 ok, 1 failed)" in out
 
 
-def test_resume_after_a_kill_runs_only_the_remaining_samples(fmus, tmp_path):
+def test_resume_after_a_kill_runs_only_the_remaining_samples(fmus, tmp_path, capsys):
     tower = fmus.builtin("tower20")
     n = 40
     body = f'[parameters]\n"node[61].fx" = {[float(i) for i in range(n)]}\n'
@@ -135,6 +136,10 @@ def test_resume_after_a_kill_runs_only_the_remaining_samples(fmus, tmp_path):
     before = results.read_bytes()
     done = before[: before.rfind(b"\n") + 1].count(b"\n") - 1
     assert 5 <= done < n, f"{done} rows when killed: the sweep was not interrupted"
+    # without --resume the finished rows are never overwritten
+    assert sweep_main([str(tmp_path / "spec.toml"), "-o", str(tmp_path / "out")]) == 2
+    assert "results.csv: already holds results; run again with --resume" in capsys.readouterr().err
+    assert results.read_bytes() == before
     code, out, err = sweep(tmp_path, spec, "--workers", "2", "--resume")
     assert code == 0, err
     assert f"resuming: {done} of {n} samples already done, {n - done} to run" in out
@@ -197,11 +202,14 @@ def _write(path, text):
         ('[random]\nn = 3\nseed = 1\n', "random.ranges: missing", "[random.ranges]"),
     ],
 )
-def test_bad_specs_name_the_key_the_reason_and_the_fix(elastic, tmp_path, body, named, fix):
-    code, out, err = sweep(tmp_path, spec_for(elastic.path, body))
+def test_bad_specs_name_the_key_the_reason_and_the_fix(elastic, tmp_path, capsys, body, named, fix):
+    # In-process (the command's own main), so each case costs no interpreter start-up;
+    # the subprocess test below shows the same on the command line.
+    code = sweep_main([str(_write(tmp_path / "spec.toml", spec_for(elastic.path, body))), "-o", str(tmp_path / "out")])
+    err = capsys.readouterr().err
     assert code == 2
     assert err.startswith("error: ") and named in err and fix in err, err
-    assert "Traceback" not in err and not (tmp_path / "out" / "results.csv").exists()
+    assert not (tmp_path / "out" / "results.csv").exists()
 
 
 def test_missing_and_mistyped_top_level_keys(elastic, tmp_path):
@@ -216,12 +224,16 @@ def test_scene_parameters_build_one_fmu_per_variant(elastic, fmus, tmp_path):
     combination is built into its own FMU and equals the FMU built from the edited scene."""
     scene = tmp_path / "prism.toml"
     scene.write_text(elastic.scene_text)
-    body = ('[scene_parameters]\n"prestress.min_tension" = [5.0, 20.0]\n"cables[*].stiffness" = [300.0, 600.0]\n'
+    body = ('[scene_parameters]\n"prestress.min_tension" = [5.0, 20.0]\n"cables[*].stiffness" = [300.0, 600.0, -1.0]\n'
             '[parameters]\n"node[7].fx" = [2.0]\n')
     spec = f'scene = "prism.toml"\nstop_time = 0.2\nstep = 0.01\noutputs = {OUTPUTS!r}\n'.replace("'", '"') + body
     code, out, err = sweep(tmp_path, spec, "--workers", "2")
     assert code == 0, err
     got = rows(tmp_path)
+    # a variant the CLI refuses to build is an error row for each of its samples
+    refused = [r for r in got if r["cables[*].stiffness"] == "-1.0"]
+    assert [r["status"] for r in refused] == ["build failed: cables[1].stiffness: must be ≥ 0, got -1"] * 2
+    got = [r for r in got if r not in refused]
     assert len(got) == 4 and len(list((tmp_path / "out" / "fmus").glob("*.fmu"))) == 4
     final = {}
     for r in got:
@@ -264,3 +276,21 @@ def test_warm_start_runs_every_sample_from_one_settled_state(fmus, open_fmu, tmp
                 seen[-1, i], seen[:, i].min(), seen[:, i].max()]  # bit for bit
         # the settled state is not the scene's start: gravity has moved the top
         assert abs(z_settled - sagging.scene["nodes"][6][2]) > 1e-3
+
+
+@pytest.mark.parametrize(
+    "scene_lines, named",
+    [
+        ('scene = "tower21"\n', "scene: no built-in scene is called 'tower21'"),
+        ('scene = "prism2-elastic"\n[scene_parameters]\n"prestress.min_tensoin" = [1.0]\n',
+         'scene_parameters."prestress.min_tensoin": the scene has no key \'min_tensoin\' there; add the key'),
+        ('scene = "prism2-elastic"\n[scene_parameters]\n"cables[16].stiffness" = [1.0]\n',
+         'scene_parameters."cables[16].stiffness": cables has 15 entries, counted from 1; use an index from 1 to 15'),
+    ],
+)
+def test_bad_scene_keys_are_spec_errors(cli, tmp_path, capsys, scene_lines, named):
+    top = 'stop_time = 0.1\nstep = 0.01\noutputs = ["node[7].x"]\n'
+    head, _, tables = scene_lines.partition("\n")
+    code = sweep_main([str(_write(tmp_path / "spec.toml", head + "\n" + top + tables)), "-o", str(tmp_path / "out")])
+    err = capsys.readouterr().err
+    assert code == 2 and err.startswith("error: ") and named in err, err
