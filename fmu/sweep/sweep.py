@@ -64,12 +64,15 @@ def run(spec_path, out, workers=2, scheduler=None, resume=False, log=print):
     todo = [i for i in range(len(samples)) if i not in results.done]
     if results.done:
         log(f"resuming: {len(results.done)} of {len(samples)} samples already done, {len(todo)} to run")
-    client, cluster = connect(workers, scheduler)
+    stats = {"ran": 0, "ok": 0, "seconds": 0.0, "instances": 0, "workers": 0}
+    client, cluster = connect(workers, scheduler) if todo else (None, None)
     try:
-        stats = _run_on(client, spec, samples, keys, archives, todo, results)
+        if todo:
+            stats = _run_on(client, spec, samples, keys, archives, todo, results)
     finally:
         results.close()
-        client.close()
+        if client is not None:
+            client.close()
         if cluster is not None:
             cluster.close()
     sweep_plot.summary(out / "results.csv", spec.swept(), spec.outputs, out / "summary.png")

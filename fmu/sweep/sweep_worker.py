@@ -12,6 +12,7 @@ re-initializes that instance with fmi2Reset, or rewinds it to the shared settled
 import math
 import os
 import shutil
+import socket
 import tempfile
 import threading
 from pathlib import Path
@@ -49,7 +50,7 @@ class Instance:
         )
         self.slave.instantiate(callbacks=self.callbacks, loggingOn=True)
         Instance.serial += 1
-        self.id = f"{os.getpid()}:{Instance.serial}"
+        self.id = f"{socket.gethostname()}:{os.getpid()}:{Instance.serial}"
         self.used = False  # a used instance is reset (or rewound) before the next sample
 
     def _callbacks(self):
