@@ -126,8 +126,8 @@ class FmuPlugin(WorkerPlugin):
 
 
 def communication_points(start, stop, step):
-    """fmpy's simulate_fmu grid: start + k·step, the last point clipped to `stop`
-    (a point within fmpy's isclose of `stop` counts as `stop`)."""
+    """fmpy's simulate_fmu grid: start + k·step, the last point clipped to `stop`; a point
+    within fmpy's isclose of `stop` is the last one, as it is."""
     points = [start]
     k = 0
     while not (points[-1] > stop or math.isclose(points[-1], stop)):
@@ -198,7 +198,8 @@ def run_sample(key, values, outputs, stop_time, step, warm=None):
 
 
 def _recover(plugin, key, inst):
-    """An instance in the Error mode is reset by the next sample; one whose reset fails is replaced."""
+    """A failed sample's instance is reset at once; one whose reset fails is freed, and the
+    next sample on this thread instantiates a new one."""
     try:
         inst.slave.reset()
         inst.used = False
