@@ -209,16 +209,13 @@ fn build_warns_once_that_the_fmu_will_refuse_its_own_settings() {
     // A stand-in binary with this program's build id: enough for the packaging.
     let binary = temp("fake_binary.so");
     std::fs::write(&binary, tensegrity_fmu::fmi::BUILD_ID.as_bytes()).unwrap();
-    let file = scene_file(&stiff_cables(Some(4), 1e8), "stiff.toml");
     let fmu = temp("stiff.fmu");
-    let (ok, _, err) = run(&[
-        "build",
-        &file,
-        "--binary",
-        binary.to_str().unwrap(),
-        "-o",
-        fmu.to_str().unwrap(),
-    ]);
+    let build = |scene: &Scene, name: &str| {
+        let file = scene_file(scene, name);
+        let args = ["build", &file, "--binary", binary.to_str().unwrap()];
+        run(&[&args[..], &["-o", fmu.to_str().unwrap()]].concat())
+    };
+    let (ok, _, err) = build(&stiff_cables(Some(4), 1e8), "stiff.toml");
     println!("{err}");
     assert!(ok, "{err}");
     assert!(fmu.is_file());
@@ -236,15 +233,7 @@ fn build_warns_once_that_the_fmu_will_refuse_its_own_settings() {
         (stiff_cables(Some(4), 1e5), "soft.toml"),
         (adaptive, "stiff-default.toml"),
     ] {
-        let file = scene_file(&scene, name);
-        let (ok, _, err) = run(&[
-            "build",
-            &file,
-            "--binary",
-            binary.to_str().unwrap(),
-            "-o",
-            fmu.to_str().unwrap(),
-        ]);
+        let (ok, _, err) = build(&scene, name);
         assert!(ok, "{err}");
         assert!(!err.contains("stability limit"), "{err}");
     }
