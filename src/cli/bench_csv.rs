@@ -33,7 +33,8 @@ pub fn run(seconds: f64, repeats: usize) -> Result<(), String> {
             "--seconds must be positive and --repeats at least 1 (got {seconds}, {repeats})"
         ));
     }
-    let model = Model::new(&builtin("tower20").expect("built-in")).map_err(|e| e.to_string())?;
+    let scene = super::bench::with_rk4(builtin("tower20").expect("built-in"));
+    let model = Model::new(&scene).map_err(|e| e.to_string())?;
     let mut sim = Simulation::new(model);
     for f in &mut sim.inputs.node_force {
         f.x = 1.0;
