@@ -67,7 +67,7 @@ pub struct Workspace {
     pub lambda: Vec<f64>,
     /// Ground contact force per contact point (`Ground::nodes` order), N.
     pub contact_force: Vec<Vector3<f64>>,
-    /// Per bar, what λ needs besides the end forces: `(b, −|ḃ|², (β − α)|b|²)`, kept
+    /// Per bar, what λ needs besides the end forces: `(b, −|ḃ|², 1/((β − α)|b|²))`, kept
     /// from the first λ pass for the second.
     bars: Vec<(Vector3<f64>, f64, f64)>,
     reactions: Reactions,
@@ -207,15 +207,16 @@ pub fn bar_response(model: &Model, ws: &mut Workspace) {
         let inertia = &model.inertia[i];
         let bv = ws.end_pos[b] - ws.end_pos[a];
         let bdot = ws.end_vel[b] - ws.end_vel[a];
-        let l2 = bv.norm_squared();
+        // One division per bar: 1/|b|² serves K's u uᵀ and λ's denominator.
+        let inv_l2 = 1.0 / bv.norm_squared();
         let cached = (
             bv,
             -bdot.norm_squared(),
-            (inertia.beta - inertia.alpha) * l2,
+            inv_l2 * inertia.inv_beta_minus_alpha,
         );
         ws.bars[i] = cached;
         if with_reactions {
-            ws.reactions.add_bar(i, &(bv / l2.sqrt()));
+            ws.reactions.add_bar(i, &bv, inv_l2);
         }
         respond(inertia, cached, ws, i);
     }
@@ -232,17 +233,17 @@ fn bar_response_again(model: &Model, ws: &mut Workspace) {
 }
 
 /// λ of bar `i` (as [`crate::model::inertia::BarInertia::lambda`], with `b`, `−|ḃ|²` and
-/// its denominator given) and its end accelerations.
+/// the reciprocal of its denominator given) and its end accelerations.
 #[inline(always)]
 fn respond(
     inertia: &crate::model::inertia::BarInertia,
-    (bv, minus_bdot2, den): (Vector3<f64>, f64, f64),
+    (bv, minus_bdot2, inv_den): (Vector3<f64>, f64, f64),
     ws: &mut Workspace,
     i: usize,
 ) {
     let (a, b) = (2 * i, 2 * i + 1);
     let (fa, fb) = (ws.end_force[a], ws.end_force[b]);
-    let lambda = (minus_bdot2 - bv.dot(&(fa * inertia.alpha + fb * inertia.beta))) / den;
+    let lambda = (minus_bdot2 - bv.dot(&(fa * inertia.alpha + fb * inertia.beta))) * inv_den;
     ws.lambda[i] = lambda;
     let (ga, gb) = (fa - bv * lambda, fb + bv * lambda);
     let w = &inertia.w;

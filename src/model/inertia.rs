@@ -17,6 +17,8 @@ pub struct BarInertia {
     pub alpha: f64,
     /// `β = W_bb − W_ab`, 1/kg.
     pub beta: f64,
+    /// `1/(β − α)`, kg (λ's denominator without `|b|²`, inverted once).
+    pub inv_beta_minus_alpha: f64,
 }
 
 impl BarInertia {
@@ -30,6 +32,7 @@ impl BarInertia {
             w,
             alpha: w[0][1] - w[0][0],
             beta: w[1][1] - w[0][1],
+            inv_beta_minus_alpha: 1.0 / ((w[1][1] - w[0][1]) - (w[0][1] - w[0][0])),
         }
     }
 

@@ -51,9 +51,9 @@ pub struct Reactions {
     /// `term_start[c]..term_start[c + 1]`.
     term_start: Vec<usize>,
     terms: Vec<(usize, f64)>,
-    /// The bar directions K was last assembled for (to assemble it again after a failed
-    /// factorization, which overwrites it).
-    units: Vec<Vector3<f64>>,
+    /// The bar vectors and `1/|b|²` K was last assembled for (to assemble it again after a
+    /// failed factorization, which overwrites it).
+    directions: Vec<(Vector3<f64>, f64)>,
 }
 
 impl Reactions {
@@ -120,7 +120,7 @@ impl Reactions {
             rhs: DVector::zeros(n),
             term_start,
             terms,
-            units: vec![Vector3::zeros(); n_bars],
+            directions: vec![(Vector3::zeros(), 0.0); n_bars],
         }
     }
 
@@ -134,7 +134,7 @@ impl Reactions {
     pub fn assemble(&mut self, units: &[Vector3<f64>]) {
         self.clear();
         for (bar, u) in units.iter().enumerate() {
-            self.add_bar(bar, u);
+            self.add_bar(bar, u, 1.0);
         }
     }
 
@@ -169,24 +169,34 @@ impl Reactions {
         }
     }
 
-    /// Adds bar `bar`'s blocks to K for its direction `u`.
+    /// Adds bar `bar`'s blocks to K for its vector `b`, given `1/|b|²` (so that
+    /// `u uᵀ = b bᵀ/|b|²` needs neither a square root nor a division per entry).
     #[inline(always)]
-    pub fn add_bar(&mut self, bar: usize, u: &Vector3<f64>) {
+    pub fn add_bar(&mut self, bar: usize, b: &Vector3<f64>, inv_l2: f64) {
         let (start, end) = (self.bar_start[bar], self.bar_start[bar + 1]);
         if start == end {
             return;
         }
-        self.units[bar] = *u;
-        let uu = u * u.transpose();
-        for c in &self.contributions[start..end] {
-            // A uniform rod: same end (4I − 3uuᵀ)/m, opposite ends (−2I + 3uuᵀ)/m.
-            let mut block = uu * -c.along;
+        self.directions[bar] = (*b, inv_l2);
+        let bb = b * b.transpose();
+        // A uniform rod: same end (4I − 3uuᵀ)/m, opposite ends (−2I + 3uuᵀ)/m.
+        let block = |c: &Contribution| {
+            let mut block = bb * (-c.along * inv_l2);
             for k in 0..3 {
                 block[(k, k)] += c.diagonal;
             }
-            match &mut self.solver {
-                Solver::Sparse(chol) => chol.k_values[c.slot] += block,
-                Solver::Dense(values) => {
+            block
+        };
+        let contributions = &self.contributions[start..end];
+        match &mut self.solver {
+            Solver::Sparse(chol) => {
+                for c in contributions {
+                    chol.k_values[c.slot] += block(c);
+                }
+            }
+            Solver::Dense(values) => {
+                for c in contributions {
+                    let block = block(c);
                     for j in 0..3 {
                         for i in 0..3 {
                             values[c.slot + j * self.n + i] += block[(i, j)];
@@ -216,9 +226,9 @@ impl Reactions {
         if matches!(self.solver, Solver::Sparse(_)) {
             // The failed factorization overwrote K: assemble it again for the fallback.
             self.clear();
-            for bar in 0..self.units.len() {
-                let u = self.units[bar];
-                self.add_bar(bar, &u);
+            for bar in 0..self.directions.len() {
+                let (b, inv_l2) = self.directions[bar];
+                self.add_bar(bar, &b, inv_l2);
             }
         }
         // A NaN fails a pivot, so only a failed or dense solve scans: non-finite data would
