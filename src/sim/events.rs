@@ -63,15 +63,24 @@ enum Switch {
 }
 
 /// The switching functions of a model and the buffers to locate their crossings, sized
-/// once.
+/// once. A step without a crossing costs one pass over the bar-end positions and a sign
+/// per switch: the signs and positions at its end are those at the next step's start,
+/// velocities and exact values are computed only once a sign has changed.
 #[derive(Debug, Clone)]
 pub struct Events {
     switches: Vec<Switch>,
     /// The state at the start of the current (part of a) step.
     pub y0: Vec<f64>,
-    /// Switching functions at `y0`.
-    g0: Vec<f64>,
-    /// Bar-end positions and velocities at both ends of the step.
+    /// Signs (`> 0`) of the switching functions at `y0` and at the end of the last step.
+    positive0: Vec<bool>,
+    positive1: Vec<bool>,
+    /// The state and the rest-length inputs `positive1` and `x1` belong to (valid while
+    /// `end_known`).
+    y1: Vec<f64>,
+    rest1: Vec<f64>,
+    end_known: bool,
+    /// Bar-end positions and velocities at both ends of the step (velocities only after
+    /// a sign change).
     x0: Vec<Vector3<f64>>,
     v0: Vec<Vector3<f64>>,
     x1: Vec<Vector3<f64>>,
@@ -126,9 +135,13 @@ impl Events {
         let n = model.state_len();
         let ends = model.coords.n_ends();
         Self {
-            g0: vec![0.0; switches.len()],
+            positive0: vec![false; switches.len()],
+            positive1: vec![false; switches.len()],
             switches,
             y0: vec![0.0; n],
+            y1: vec![0.0; n],
+            rest1: vec![0.0; model.reeled_start.len()],
+            end_known: false,
             x0: vec![Vector3::zeros(); ends],
             v0: vec![Vector3::zeros(); ends],
             x1: vec![Vector3::zeros(); ends],
@@ -141,32 +154,53 @@ impl Events {
         self.switches.is_empty()
     }
 
-    /// Notes the state a step starts from: copies it and evaluates the switches there.
+    /// Notes the state a step starts from: copies it and takes the switches' signs there
+    /// (from the last step's end when that is this state, with the same inputs).
     pub fn start(&mut self, model: &Model, inputs: &Inputs, y: &[f64]) {
         self.y0.copy_from_slice(y);
-        ends(model, y, &mut self.x0, &mut self.v0);
-        for (g, s) in self.g0.iter_mut().zip(&self.switches) {
-            *g = value(s, inputs, &self.x0);
+        if self.end_known && self.y1 == y && self.rest1 == inputs.rest_length {
+            std::mem::swap(&mut self.x0, &mut self.x1);
+            std::mem::swap(&mut self.positive0, &mut self.positive1);
+        } else {
+            end_positions(model, y, &mut self.x0);
+            for (p, s) in self.positive0.iter_mut().zip(&self.switches) {
+                *p = positive(s, inputs, &self.x0);
+            }
         }
+        self.end_known = false;
     }
 
     /// After a step of `h` from the noted start to `y`: the time from the start of the
     /// earliest sign change of a switching function that lies inside the step (not
     /// within [`EDGE`] of either end), if any. The time returned is just past the crossing.
     pub fn locate(&mut self, model: &Model, inputs: &Inputs, y: &[f64], h: f64) -> Option<f64> {
-        ends(model, y, &mut self.x1, &mut self.v1);
+        end_positions(model, y, &mut self.x1);
+        for (p, s) in self.positive1.iter_mut().zip(&self.switches) {
+            *p = positive(s, inputs, &self.x1);
+        }
         let (lo, hi) = (EDGE * h, (1.0 - EDGE) * h);
         let mut earliest: Option<f64> = None;
+        let mut velocities = false;
         for (j, s) in self.switches.iter().enumerate() {
-            let g0 = self.g0[j];
-            let g1 = value(s, inputs, &self.x1);
-            if (g0 > 0.0) == (g1 > 0.0) {
+            if self.positive0[j] == self.positive1[j] {
                 continue;
             }
+            if !velocities {
+                let half = y.len() / 2;
+                end_velocities(model, &self.y0[half..], &mut self.v0);
+                end_velocities(model, &y[half..], &mut self.v1);
+                velocities = true;
+            }
+            let (g0, g1) = (value(s, inputs, &self.x0), value(s, inputs, &self.x1));
             let theta = self.crossing(s, inputs, g0, g1, h);
             if theta > lo && theta < hi && earliest.is_none_or(|e| theta < e) {
                 earliest = Some(theta);
             }
+        }
+        if earliest.is_none() {
+            self.y1.copy_from_slice(y);
+            self.rest1.copy_from_slice(&inputs.rest_length);
+            self.end_known = true;
         }
         earliest
     }
@@ -236,12 +270,17 @@ impl Events {
     }
 }
 
-/// Bar-end positions and velocities of the state `y = [q; q̇]`.
-fn ends(model: &Model, y: &[f64], x: &mut [Vector3<f64>], v: &mut [Vector3<f64>]) {
-    let half = y.len() / 2;
-    let (q, qd) = y.split_at(half);
-    for (e, (x, v)) in x.iter_mut().zip(v.iter_mut()).enumerate() {
+/// Bar-end positions of the state `y = [q; q̇]`.
+fn end_positions(model: &Model, y: &[f64], x: &mut [Vector3<f64>]) {
+    let q = &y[..y.len() / 2];
+    for (e, x) in x.iter_mut().enumerate() {
         *x = model.coords.end_vector(e, q, true);
+    }
+}
+
+/// Bar-end velocities of the reduced velocities `qd`.
+fn end_velocities(model: &Model, qd: &[f64], v: &mut [Vector3<f64>]) {
+    for (e, v) in v.iter_mut().enumerate() {
         *v = model.coords.end_vector(e, qd, false);
     }
 }
@@ -251,6 +290,27 @@ fn rest_length(rest: Rest, inputs: &Inputs) -> f64 {
         Rest::Fixed(r) => r,
         Rest::Input(i) => inputs.rest_length[i].max(0.0),
     }
+}
+
+/// Whether [`value`] is `> 0`, without its square root where `|s|²` and `s₀²` are not within
+/// round-off of each other (there it takes the root, so the sign is always `value`'s).
+fn positive(s: &Switch, inputs: &Inputs, x: &[Vector3<f64>]) -> bool {
+    if let Switch::Cable { a, b, rest } = *s {
+        let p = |p: Point| match p {
+            Point::End(e) => x[e],
+            Point::Fixed(x) => x,
+        };
+        let n2 = (p(b) - p(a)).norm_squared();
+        let s0 = rest_length(rest, inputs);
+        let margin = n2 - s0 * s0;
+        if margin > 1e-9 * n2 {
+            return true;
+        }
+        if margin < -1e-9 * n2 {
+            return false;
+        }
+    }
+    value(s, inputs, x) > 0.0
 }
 
 /// A switch at the bar-end positions `x`.
