@@ -132,28 +132,54 @@ pub fn accelerations(
     }
     acc.iter_mut().for_each(|a| *a = 0.0);
     let coords = &model.coords;
+    let (acc, _) = acc.as_chunks_mut::<3>();
+    if let Some(single) = &coords.single {
+        for (term, a) in single.iter().zip(&ws.end_acc) {
+            if let Some((g, c)) = *term {
+                add_scaled(&mut acc[g], c, a);
+            }
+        }
+        return;
+    }
     for (e, a) in ws.end_acc.iter().enumerate() {
         for &(g, c) in coords.row(e) {
-            let at = &mut acc[3 * g..3 * g + 3];
-            at[0] += c * a.x;
-            at[1] += c * a.y;
-            at[2] += c * a.z;
+            add_scaled(&mut acc[g], c, a);
         }
     }
+}
+
+#[inline(always)]
+fn add_scaled(at: &mut [f64; 3], c: f64, a: &Vector3<f64>) {
+    at[0] += c * a.x;
+    at[1] += c * a.y;
+    at[2] += c * a.z;
 }
 
 /// Stage 1: end and node positions and velocities from the reduced state.
 pub fn kinematics(model: &Model, q: &[f64], v: &[f64], ws: &mut Workspace) {
     let coords = &model.coords;
-    for e in 0..coords.n_ends() {
-        let mut x = coords.fixed[e];
-        let mut xdot = Vector3::zeros();
-        for &(g, c) in coords.row(e) {
-            x += Vector3::new(q[3 * g], q[3 * g + 1], q[3 * g + 2]) * c;
-            xdot += Vector3::new(v[3 * g], v[3 * g + 1], v[3 * g + 2]) * c;
+    if let Some(single) = &coords.single {
+        let (q, v) = (q.as_chunks::<3>().0, v.as_chunks::<3>().0);
+        let ends = ws.end_pos.iter_mut().zip(ws.end_vel.iter_mut());
+        for ((term, fixed), (x, xdot)) in single.iter().zip(&coords.fixed).zip(ends) {
+            *x = *fixed;
+            *xdot = Vector3::zeros();
+            if let Some((g, c)) = *term {
+                *x += Vector3::from(q[g]) * c;
+                *xdot += Vector3::from(v[g]) * c;
+            }
         }
-        ws.end_pos[e] = x;
-        ws.end_vel[e] = xdot;
+    } else {
+        for e in 0..coords.n_ends() {
+            let mut x = coords.fixed[e];
+            let mut xdot = Vector3::zeros();
+            for &(g, c) in coords.row(e) {
+                x += Vector3::new(q[3 * g], q[3 * g + 1], q[3 * g + 2]) * c;
+                xdot += Vector3::new(v[3 * g], v[3 * g + 1], v[3 * g + 2]) * c;
+            }
+            ws.end_pos[e] = x;
+            ws.end_vel[e] = xdot;
+        }
     }
     for (n, end) in coords.node_end.iter().enumerate() {
         if let Some(e) = *end {

@@ -43,6 +43,9 @@ pub struct Coordinates {
     pub row_start: Vec<usize>,
     /// `(g, U₂[e, g])` entries, row by row.
     pub entries: Vec<(usize, f64)>,
+    /// The sparse basis's rows, each at most one entry (`None`: a pinned end), so the
+    /// hot loops read an end's term directly instead of through `row_start`.
+    pub single: Option<Vec<Option<(usize, f64)>>>,
     /// Constraint columns used for the reactions Ω.
     pub constraints: Vec<ConstraintColumn>,
     /// True for a bar whose ends are both pinned: it never moves.
@@ -93,6 +96,7 @@ impl Coordinates {
             fixed: Vec::new(),
             row_start: Vec::new(),
             entries: Vec::new(),
+            single: None,
             constraints: Vec::new(),
             static_bar: bars.iter().map(|&(a, b)| pinned[a] && pinned[b]).collect(),
         }
@@ -139,10 +143,11 @@ impl Coordinates {
             }
         }
         self.row_start.push(0);
-        for row in rows {
+        for row in &rows {
             self.entries.extend(row);
             self.row_start.push(self.entries.len());
         }
+        self.single = Some(rows);
     }
 
     /// The paper's `P` (k−1 joint columns per shared node, one pin column per pinned
@@ -260,6 +265,12 @@ impl Coordinates {
         } else {
             Vector3::zeros()
         };
+        if let Some(single) = &self.single {
+            if let Some((g, c)) = single[e] {
+                x += Vector3::from(eta.as_chunks::<3>().0[g]) * c;
+            }
+            return x;
+        }
         for &(g, c) in self.row(e) {
             x += Vector3::new(eta[3 * g], eta[3 * g + 1], eta[3 * g + 2]) * c;
         }
