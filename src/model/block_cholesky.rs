@@ -129,17 +129,22 @@ impl BlockLdl {
             .fold(0.0, f64::max);
         let tiny = SINGULAR * scale;
         for k in 0..self.n {
+            let diagonal = self.l_start[k];
             for u in &self.updates[self.update_start[k]..self.update_start[k + 1]] {
-                let delta = self.l_values[u.source] * self.k_values[u.with].transpose();
-                self.k_values[u.target] -= delta;
+                let (l, ld) = (&self.l_values[u.source], self.k_values[u.with]);
+                if u.target == diagonal {
+                    // Only the lower triangle of a pivot block is read.
+                    subtract_lower_abt(&mut self.k_values[u.target], l, &ld);
+                } else {
+                    subtract_abt(&mut self.k_values[u.target], l, &ld);
+                }
             }
-            let (diagonal, end) = (self.l_start[k], self.l_start[k + 1]);
             let Some(d_inv) = inverse3(&self.k_values[diagonal], tiny) else {
                 return false;
             };
             self.d_inv[k] = d_inv;
-            for p in diagonal + 1..end {
-                self.l_values[p] = self.k_values[p] * d_inv;
+            for p in diagonal + 1..self.l_start[k + 1] {
+                self.l_values[p] = mul_symmetric(&self.k_values[p], &d_inv);
             }
         }
         true
@@ -183,6 +188,32 @@ impl BlockLdl {
         }
         m
     }
+}
+
+/// `s −= a bᵀ`, written out so that each entry is three products and a sum.
+#[inline(always)]
+fn subtract_abt(s: &mut Matrix3<f64>, a: &Matrix3<f64>, b: &Matrix3<f64>) {
+    for j in 0..3 {
+        for i in 0..3 {
+            s[(i, j)] -= a[(i, 0)] * b[(j, 0)] + a[(i, 1)] * b[(j, 1)] + a[(i, 2)] * b[(j, 2)];
+        }
+    }
+}
+
+/// The lower triangle of `s −= a bᵀ` (the upper one is left stale).
+#[inline(always)]
+fn subtract_lower_abt(s: &mut Matrix3<f64>, a: &Matrix3<f64>, b: &Matrix3<f64>) {
+    for j in 0..3 {
+        for i in j..3 {
+            s[(i, j)] -= a[(i, 0)] * b[(j, 0)] + a[(i, 1)] * b[(j, 1)] + a[(i, 2)] * b[(j, 2)];
+        }
+    }
+}
+
+/// `a d` for a symmetric `d` given whole.
+#[inline(always)]
+fn mul_symmetric(a: &Matrix3<f64>, d: &Matrix3<f64>) -> Matrix3<f64> {
+    Matrix3::from_fn(|i, j| a[(i, 0)] * d[(0, j)] + a[(i, 1)] * d[(1, j)] + a[(i, 2)] * d[(2, j)])
 }
 
 /// The inverse of a symmetric 3 × 3 matrix from its adjugate: one division, no square
