@@ -1,0 +1,298 @@
+"""A tensegrity scene as a MuJoCo model (MJCF written from the scene, nothing by hand).
+
+The mapping keeps the project's mechanics (`shared/design/dynamics.md`):
+- each bar is a free body with the bar's mass at its centre and a thin uniform rod's
+  inertia `m L²/12` about its centre (payloads of `[[point_masses]]` are added at the bar
+  end the project puts them on: the first bar end listed at their node);
+- bar ends at a shared node are joined by `connect` equalities, pinned ends are connected
+  to a world site at the pin;
+- elastic cables are spatial tendons between the node sites, stiffness κ and
+  `springlength="0 L"`: no force below the rest length L, so a cable goes slack;
+- force inputs are actuators at the node sites whose gear is in a world-fixed frame, so
+  a constant control is a constant force in world axes, as `node[i].fx/fy/fz` is;
+- gravity is the scene's (none when it declares none); contacts are disabled.
+
+What differs is MuJoCo's own: its equality constraints are soft (solref/solimp), so the
+joints give a little under load where the project's are exact.
+"""
+
+from dataclasses import dataclass
+from xml.sax.saxutils import quoteattr
+
+import mujoco
+import numpy as np
+
+# The world-fixed frame whose axes the force actuators push along.
+WORLD_FRAME_SITE = "world_frame"
+# A bar's spin about its own axis is never excited (every force acts on the axis and the
+# rod is axisymmetric), so any positive axial inertia gives the same motion; MuJoCo needs
+# one. This fraction of the transverse inertia keeps the mass matrix well conditioned.
+AXIAL_INERTIA_FRACTION = 1e-3
+
+
+@dataclass(frozen=True)
+class MujocoSettings:
+    """MuJoCo's numerical settings; the defaults are the ones the benchmark uses."""
+
+    timestep: float = 1e-3
+    integrator: str = "implicitfast"  # or "RK4", "Euler", "implicit"
+    # Equality softness: impedance d = 0.9999 (MuJoCo's largest) makes a joint carry all
+    # but 1e-4 of the load that would pull it apart; the time constant sets how fast the
+    # remaining violation is pulled back (it must stay >= 2 timesteps).
+    solref: tuple = (0.02, 1.0)
+    solimp: tuple = (0.9999, 0.9999, 0.001, 0.5, 2.0)
+    solver: str = "Newton"
+    iterations: int = 100
+    tolerance: float = 1e-12
+
+
+@dataclass(frozen=True)
+class Structure:
+    """What the MJCF is written from: the scene's topology and geometry (its TOML, as the
+    FMU ships it) and the FMU's parameter values (rest lengths derived from the prestress,
+    stiffnesses, masses, gravity)."""
+
+    scene: dict
+    parameters: dict
+
+    @property
+    def nodes(self) -> np.ndarray:
+        return np.asarray(self.scene["nodes"], dtype=float)
+
+    @property
+    def bars(self) -> list:
+        return [tuple(b["nodes"]) for b in self.scene["bars"]]
+
+    @property
+    def pinned(self) -> set:
+        return set(self.scene.get("fixed", []))
+
+    def bar_mass(self, k: int) -> float:
+        return self.parameters.get(f"bar[{k}].mass", self.scene["bars"][k - 1]["mass"])
+
+    def gravity(self) -> np.ndarray:
+        if "gravity" not in self.scene:
+            return np.zeros(3)
+        return np.array([self.parameters[f"gravity.{a}"] for a in "xyz"])
+
+    def cable_law(self, j: int) -> tuple:
+        """(stiffness N/m, rest length m) of elastic cable j, 1-based."""
+        return self.parameters[f"cable[{j}].stiffness"], self.parameters[f"cable[{j}].rest_length"]
+
+    def total_mass(self) -> float:
+        bars = sum(self.bar_mass(k) for k in range(1, len(self.bars) + 1))
+        return bars + sum(p["mass"] for p in self.scene.get("point_masses", []))
+
+
+def check_supported(structure: Structure):
+    """Refuses scene features this mapping does not carry over, naming them."""
+    scene = structure.scene
+    for j, cable in enumerate(scene["cables"], start=1):
+        if cable.get("control") or cable.get("damping"):
+            raise NotImplementedError(
+                f"cables[{j}]: only undamped elastic cables are mapped to MuJoCo"
+            )
+    for key in ("loads", "ground", "velocities"):
+        if scene.get(key):
+            raise NotImplementedError(f"scene key {key!r} is not mapped to MuJoCo")
+    if scene.get("start", "as_given") != "as_given":
+        raise NotImplementedError("only start = \"as_given\" is mapped to MuJoCo")
+
+
+def bar_site(k: int, side: int) -> str:
+    """Site at end `side` (0 = first node, 1 = second) of bar k (1-based)."""
+    return f"bar{k}.{'ab'[side]}"
+
+
+def node_sites(structure: Structure) -> list:
+    """The site standing for each node: the first bar end listed there (the end the project
+    reads the node from), or a world site for a node on no bar."""
+    sites = [f"node{i}" for i in range(1, len(structure.nodes) + 1)]
+    seen = set()
+    for k, bar in enumerate(structure.bars, start=1):
+        for side, node in enumerate(bar):
+            if node not in seen:
+                seen.add(node)
+                sites[node - 1] = bar_site(k, side)
+    return sites
+
+
+def _vec(v) -> str:
+    return " ".join(repr(float(x)) for x in v)
+
+
+def _bar_body(structure: Structure, k: int, payloads: dict) -> str:
+    """A free body for bar k: frame at the bar's centre, local z along the bar."""
+    a, b = structure.bars[k - 1]
+    pa, pb = structure.nodes[a - 1], structure.nodes[b - 1]
+    length = float(np.linalg.norm(pb - pa))
+    rod = structure.bar_mass(k)
+    # Point masses on the ends shift the centre of mass along the axis.
+    ends = [(-length / 2, payloads.get((k, 0), 0.0)), (length / 2, payloads.get((k, 1), 0.0))]
+    mass = rod + sum(m for _, m in ends)
+    com = sum(z * m for z, m in ends) / mass
+    transverse = rod * length**2 / 12 + rod * com**2 + sum(m * (z - com) ** 2 for z, m in ends)
+    axial = AXIAL_INERTIA_FRACTION * transverse
+    moving = not {a, b} <= structure.pinned
+    return f"""
+    <body name="bar{k}" pos="{_vec((pa + pb) / 2)}" zaxis="{_vec(pb - pa)}">
+      {'<freejoint/>' if moving else ''}
+      <inertial pos="0 0 {com!r}" mass="{mass!r}" diaginertia="{_vec([transverse, transverse, axial])}"/>
+      <geom type="capsule" size="0.01" fromto="0 0 {-length / 2!r} 0 0 {length / 2!r}"/>
+      <site name="{bar_site(k, 0)}" pos="0 0 {-length / 2!r}"/>
+      <site name="{bar_site(k, 1)}" pos="0 0 {length / 2!r}"/>
+    </body>"""
+
+
+def _payloads(structure: Structure) -> dict:
+    """(bar, side) -> payload mass: the project adds a point mass to the first end at its node."""
+    first_end = {}
+    for k, bar in enumerate(structure.bars, start=1):
+        for side, node in enumerate(bar):
+            first_end.setdefault(node, (k, side))
+    payloads = {}
+    for p in structure.scene.get("point_masses", []):
+        end = first_end[p["node"]]
+        payloads[end] = payloads.get(end, 0.0) + p["mass"]
+    return payloads
+
+
+def _world_sites(structure: Structure) -> list:
+    """Node sites on the world: pins and nodes on no bar."""
+    on_bars = {n for bar in structure.bars for n in bar}
+    wanted = sorted(structure.pinned | (set(range(1, len(structure.nodes) + 1)) - on_bars))
+    return [
+        f'<site name="node{i}" pos="{_vec(structure.nodes[i - 1])}"/>' for i in wanted
+    ]
+
+
+def _joints(structure: Structure) -> list:
+    """connect equalities: every bar end to the first end at its node, or to the pin."""
+    ends_at = {}
+    for k, bar in enumerate(structure.bars, start=1):
+        for side, node in enumerate(bar):
+            ends_at.setdefault(node, []).append((k, side))
+    lines = []
+    for node, ends in sorted(ends_at.items()):
+        static = [e for e in ends if set(structure.bars[e[0] - 1]) <= structure.pinned]
+        moving = [e for e in ends if e not in static]
+        if node in structure.pinned:
+            targets = [(e, f"node{node}") for e in moving]
+        else:
+            anchor = bar_site(*ends[0])
+            targets = [(e, anchor) for e in ends[1:]]
+        lines += [f'<connect site1="{bar_site(*e)}" site2="{to}"/>' for e, to in targets]
+    return lines
+
+
+def _cables(structure: Structure, sites: list) -> list:
+    lines = []
+    for j, cable in enumerate(structure.scene["cables"], start=1):
+        kappa, rest = structure.cable_law(j)
+        a, b = cable["nodes"]
+        lines.append(
+            f'<spatial name="cable{j}" stiffness="{kappa!r}" springlength="0 {rest!r}">'
+            f'<site site="{sites[a - 1]}"/><site site="{sites[b - 1]}"/></spatial>'
+        )
+    return lines
+
+
+def force_input_actuators(structure: Structure) -> list:
+    """(node, axis) of each actuator, in actuator order."""
+    return [(n, axis) for n in structure.scene.get("force_inputs", []) for axis in range(3)]
+
+
+def _actuators(structure: Structure, sites: list) -> list:
+    lines = []
+    for node, axis in force_input_actuators(structure):
+        gear = [0.0] * 6
+        gear[axis] = 1.0
+        lines.append(
+            f'<general name="node{node}.f{"xyz"[axis]}" site="{sites[node - 1]}" '
+            f'refsite="{WORLD_FRAME_SITE}" gear="{_vec(gear)}"/>'
+        )
+    return lines
+
+
+def mjcf(structure: Structure, settings: MujocoSettings = MujocoSettings()) -> str:
+    """The MJCF document of the structure."""
+    check_supported(structure)
+    sites = node_sites(structure)
+    payloads = _payloads(structure)
+    bodies = [_bar_body(structure, k, payloads) for k in range(1, len(structure.bars) + 1)]
+    name = quoteattr(structure.scene.get("name", "tensegrity"))
+    s = settings
+    return f"""<mujoco model={name}>
+  <compiler angle="radian" autolimits="true"/>
+  <option timestep="{s.timestep!r}" integrator="{s.integrator}" gravity="{_vec(structure.gravity())}"
+          solver="{s.solver}" iterations="{s.iterations}" tolerance="{s.tolerance!r}">
+    <flag contact="disable"/>
+  </option>
+  <default>
+    <equality solref="{_vec(s.solref)}" solimp="{_vec(s.solimp)}"/>
+    <geom contype="0" conaffinity="0"/>
+  </default>
+  <worldbody>
+    <site name="{WORLD_FRAME_SITE}"/>
+    {chr(10).join('    ' + w for w in _world_sites(structure))}
+    {''.join(bodies)}
+  </worldbody>
+  <equality>
+    {chr(10).join('    ' + j for j in _joints(structure))}
+  </equality>
+  <tendon>
+    {chr(10).join('    ' + c for c in _cables(structure, sites))}
+  </tendon>
+  <actuator>
+    {chr(10).join('    ' + a for a in _actuators(structure, sites))}
+  </actuator>
+</mujoco>
+"""
+
+
+def build(structure: Structure, settings: MujocoSettings = MujocoSettings()) -> mujoco.MjModel:
+    return mujoco.MjModel.from_xml_string(mjcf(structure, settings))
+
+
+class NodeReader:
+    """Node positions (n_nodes × 3, m) from MuJoCo states, through the node sites."""
+
+    def __init__(self, model: mujoco.MjModel, structure: Structure):
+        self.model = model
+        self.data = mujoco.MjData(model)
+        self.site_ids = np.array(
+            [mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_SITE, s) for s in node_sites(structure)]
+        )
+
+    def positions(self, state: np.ndarray) -> np.ndarray:
+        mujoco.mj_setState(self.model, self.data, state, STATE_SPEC)
+        mujoco.mj_kinematics(self.model, self.data)
+        return self.data.site_xpos[self.site_ids].copy()
+
+
+STATE_SPEC = mujoco.mjtState.mjSTATE_FULLPHYSICS
+
+
+def initial_state(model: mujoco.MjModel) -> np.ndarray:
+    """The model's start (the scene's geometry at rest) as a full physics state."""
+    data = mujoco.MjData(model)
+    mujoco.mj_resetData(model, data)
+    state = np.empty(mujoco.mj_stateSize(model, STATE_SPEC))
+    mujoco.mj_getState(model, data, state, STATE_SPEC)
+    return state
+
+
+def controls(structure: Structure, forces: dict) -> np.ndarray:
+    """The constant actuator controls for forces {node: (fx, fy, fz)}, N."""
+    return np.array(
+        [forces.get(node, (0.0, 0.0, 0.0))[axis] for node, axis in force_input_actuators(structure)]
+    )
+
+
+def cable_tensions(model: mujoco.MjModel, state: np.ndarray) -> np.ndarray:
+    """Each tendon's tension at a state, N: κ (length − L) above L, 0 below."""
+    data = mujoco.MjData(model)
+    mujoco.mj_setState(model, data, state, STATE_SPEC)
+    mujoco.mj_forward(model, data)
+    stretch = data.ten_length - model.tendon_lengthspring[:, 1]
+    return model.tendon_stiffness * np.maximum(stretch, 0.0)
