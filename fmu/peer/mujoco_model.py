@@ -5,7 +5,8 @@ The mapping keeps the project's mechanics (`shared/design/dynamics.md`):
   inertia `m L²/12` about its centre (payloads of `[[point_masses]]` are added at the bar
   end the project puts them on: the first bar end listed at their node);
 - bar ends at a shared node are joined by `connect` equalities, pinned ends are connected
-  to a world site at the pin;
+  to a world site at the pin (or, with `joints="tree"`, the bars hang on ball joints along
+  a spanning tree grown from the pins, and equalities close only the loops);
 - elastic cables are spatial tendons between the node sites, stiffness κ and
   `springlength="0 L"`: no force below the rest length L, so a cable goes slack;
 - force inputs are actuators at the node sites whose gear is in a world-fixed frame, so
@@ -13,7 +14,7 @@ The mapping keeps the project's mechanics (`shared/design/dynamics.md`):
 - gravity is the scene's (none when it declares none); contacts are disabled.
 
 What differs is MuJoCo's own: its equality constraints are soft (solref/solimp), so the
-joints give a little under load where the project's are exact.
+joints give a little under load where the project's are exact; ball joints are exact.
 """
 
 from dataclasses import dataclass
@@ -36,6 +37,10 @@ class MujocoSettings:
 
     timestep: float = 1e-3
     integrator: str = "implicitfast"  # or "RK4", "Euler", "implicit"
+    # "equality": every bar a free body, joints as connect equalities (as a general
+    # tensegrity needs); "tree": ball joints along a spanning tree of the bars, equalities
+    # only where bars close a loop (none in a tower).
+    joints: str = "equality"
     # Equality softness: impedance d = 0.9999 (MuJoCo's largest) makes a joint carry all
     # but 1e-4 of the load that would pull it apart; the time constant sets how fast the
     # remaining violation is pulled back (it must stay >= 2 timesteps).
@@ -121,11 +126,122 @@ def _vec(v) -> str:
     return " ".join(repr(float(x)) for x in v)
 
 
-def _bar_body(structure: Structure, k: int, payloads: dict) -> str:
-    """A free body for bar k: frame at the bar's centre, local z along the bar."""
+def _bar_frame(structure: Structure, k: int):
+    """(centre, rotation whose z column runs from the bar's first node to its second, length)."""
     a, b = structure.bars[k - 1]
     pa, pb = structure.nodes[a - 1], structure.nodes[b - 1]
-    length = float(np.linalg.norm(pb - pa))
+    z = (pb - pa) / np.linalg.norm(pb - pa)
+    helper = np.eye(3)[np.argmin(np.abs(z))]
+    x = np.cross(helper, z)
+    x /= np.linalg.norm(x)
+    return (pa + pb) / 2, np.column_stack([x, np.cross(z, x), z]), float(np.linalg.norm(pb - pa))
+
+
+def _quat(rotation: np.ndarray) -> np.ndarray:
+    q = np.empty(4)
+    mujoco.mju_mat2Quat(q, rotation.flatten())
+    return q
+
+
+@dataclass
+class Plan:
+    """How the bars become bodies: each bar's parent (0 = the world) and joint ("free",
+    "ball" at one end, or None: welded, for a bar pinned at both ends), and the connect
+    equalities (site, site) for every bar end the joints leave unjoined."""
+
+    parent: dict
+    joint: dict
+    joint_side: dict
+    connects: list
+
+
+def _ends_at(structure: Structure) -> dict:
+    ends = {}
+    for k, bar in enumerate(structure.bars, start=1):
+        for side, node in enumerate(bar):
+            ends.setdefault(node, []).append((k, side))
+    return ends
+
+
+def _is_static(structure: Structure, k: int) -> bool:
+    return set(structure.bars[k - 1]) <= structure.pinned
+
+
+def equality_plan(structure: Structure) -> Plan:
+    """Every bar a free body; joints and pins are all connect equalities."""
+    bars = range(1, len(structure.bars) + 1)
+    plan = Plan({k: 0 for k in bars}, {}, {}, [])
+    for k in bars:
+        plan.joint[k] = None if _is_static(structure, k) else "free"
+    for node, ends in sorted(_ends_at(structure).items()):
+        moving = [e for e in ends if not _is_static(structure, e[0])]
+        if node in structure.pinned:
+            plan.connects += [(bar_site(*e), f"node{node}") for e in moving]
+        else:
+            plan.connects += [(bar_site(*e), bar_site(*ends[0])) for e in ends[1:]]
+    return plan
+
+
+def tree_plan(structure: Structure) -> Plan:
+    """Bars as a kinematic tree of ball joints grown from the pins (a free root for a
+    component without one); connect equalities only where the bars close a loop."""
+    ends_at = _ends_at(structure)
+    plan = Plan({}, {}, {}, [])
+    queue = []
+    for k, bar in enumerate(structure.bars, start=1):
+        pinned_sides = [side for side, node in enumerate(bar) if node in structure.pinned]
+        if pinned_sides:
+            plan.parent[k] = 0
+            plan.joint[k] = None if len(pinned_sides) == 2 else "ball"
+            plan.joint_side[k] = pinned_sides[0]
+            queue.append(k)
+    anchor = {}  # node -> the bar end the others at that node are joined to
+    bars = list(range(1, len(structure.bars) + 1))
+    while len(plan.parent) < len(bars) or queue:
+        if not queue:  # a component with no pin: its first bar floats freely
+            root = next(k for k in bars if k not in plan.parent)
+            plan.parent[root], plan.joint[root] = 0, "free"
+            queue.append(root)
+        k = queue.pop(0)
+        for side, node in enumerate(structure.bars[k - 1]):
+            if node in structure.pinned or node in anchor:
+                continue
+            anchor[node] = (k, side)
+            for child, child_side in ends_at[node]:
+                if child not in plan.parent:
+                    plan.parent[child], plan.joint[child] = k, "ball"
+                    plan.joint_side[child] = child_side
+                    queue.append(child)
+    for node, ends in sorted(ends_at.items()):
+        for k, side in ends:
+            if _joined_by_tree(plan, structure, node, (k, side), anchor.get(node)):
+                continue
+            target = f"node{node}" if node in structure.pinned else bar_site(*anchor[node])
+            plan.connects.append((bar_site(k, side), target))
+    return plan
+
+
+def _joined_by_tree(plan: Plan, structure: Structure, node: int, end: tuple, anchor) -> bool:
+    """Whether the tree already holds this bar end at its node: it is the node's anchor, its
+    bar is welded, or its ball joint sits there on the anchor's bar (on the world at a pin)."""
+    k, side = end
+    if end == anchor or plan.joint[k] is None:
+        return True
+    at_its_joint = plan.joint[k] == "ball" and plan.joint_side[k] == side
+    if node in structure.pinned:
+        return at_its_joint and plan.parent[k] == 0
+    return at_its_joint and plan.parent[k] == anchor[0]
+
+
+def _bar_body(structure: Structure, k: int, plan: Plan, payloads: dict, children: dict) -> str:
+    """Bar k's body (frame at its centre, local z along it) with its children inside."""
+    centre, rotation, length = _bar_frame(structure, k)
+    parent = plan.parent[k]
+    if parent:
+        parent_centre, parent_rotation, _ = _bar_frame(structure, parent)
+        pos, rotation_in_parent = parent_rotation.T @ (centre - parent_centre), parent_rotation.T @ rotation
+    else:
+        pos, rotation_in_parent = centre, rotation
     rod = structure.bar_mass(k)
     # Point masses on the ends shift the centre of mass along the axis.
     ends = [(-length / 2, payloads.get((k, 0), 0.0)), (length / 2, payloads.get((k, 1), 0.0))]
@@ -133,26 +249,27 @@ def _bar_body(structure: Structure, k: int, payloads: dict) -> str:
     com = sum(z * m for z, m in ends) / mass
     transverse = rod * length**2 / 12 + rod * com**2 + sum(m * (z - com) ** 2 for z, m in ends)
     axial = AXIAL_INERTIA_FRACTION * transverse
-    moving = not {a, b} <= structure.pinned
+    joint = {
+        "free": "<freejoint/>",
+        "ball": f'<joint type="ball" pos="0 0 {(plan.joint_side.get(k, 0) - 0.5) * length!r}"/>',
+        None: "",
+    }[plan.joint[k]]
+    inner = "".join(_bar_body(structure, c, plan, payloads, children) for c in children.get(k, []))
     return f"""
-    <body name="bar{k}" pos="{_vec((pa + pb) / 2)}" zaxis="{_vec(pb - pa)}">
-      {'<freejoint/>' if moving else ''}
+    <body name="bar{k}" pos="{_vec(pos)}" quat="{_vec(_quat(rotation_in_parent))}">
+      {joint}
       <inertial pos="0 0 {com!r}" mass="{mass!r}" diaginertia="{_vec([transverse, transverse, axial])}"/>
       <geom type="capsule" size="0.01" fromto="0 0 {-length / 2!r} 0 0 {length / 2!r}"/>
       <site name="{bar_site(k, 0)}" pos="0 0 {-length / 2!r}"/>
-      <site name="{bar_site(k, 1)}" pos="0 0 {length / 2!r}"/>
+      <site name="{bar_site(k, 1)}" pos="0 0 {length / 2!r}"/>{inner}
     </body>"""
 
 
 def _payloads(structure: Structure) -> dict:
     """(bar, side) -> payload mass: the project adds a point mass to the first end at its node."""
-    first_end = {}
-    for k, bar in enumerate(structure.bars, start=1):
-        for side, node in enumerate(bar):
-            first_end.setdefault(node, (k, side))
     payloads = {}
     for p in structure.scene.get("point_masses", []):
-        end = first_end[p["node"]]
+        end = _ends_at(structure)[p["node"]][0]
         payloads[end] = payloads.get(end, 0.0) + p["mass"]
     return payloads
 
@@ -164,25 +281,6 @@ def _world_sites(structure: Structure) -> list:
     return [
         f'<site name="node{i}" pos="{_vec(structure.nodes[i - 1])}"/>' for i in wanted
     ]
-
-
-def _joints(structure: Structure) -> list:
-    """connect equalities: every bar end to the first end at its node, or to the pin."""
-    ends_at = {}
-    for k, bar in enumerate(structure.bars, start=1):
-        for side, node in enumerate(bar):
-            ends_at.setdefault(node, []).append((k, side))
-    lines = []
-    for node, ends in sorted(ends_at.items()):
-        static = [e for e in ends if set(structure.bars[e[0] - 1]) <= structure.pinned]
-        moving = [e for e in ends if e not in static]
-        if node in structure.pinned:
-            targets = [(e, f"node{node}") for e in moving]
-        else:
-            anchor = bar_site(*ends[0])
-            targets = [(e, anchor) for e in ends[1:]]
-        lines += [f'<connect site1="{bar_site(*e)}" site2="{to}"/>' for e, to in targets]
-    return lines
 
 
 def _cables(structure: Structure, sites: list) -> list:
@@ -219,7 +317,12 @@ def mjcf(structure: Structure, settings: MujocoSettings = MujocoSettings()) -> s
     check_supported(structure)
     sites = node_sites(structure)
     payloads = _payloads(structure)
-    bodies = [_bar_body(structure, k, payloads) for k in range(1, len(structure.bars) + 1)]
+    plan = tree_plan(structure) if settings.joints == "tree" else equality_plan(structure)
+    children = {}
+    for k in range(1, len(structure.bars) + 1):
+        children.setdefault(plan.parent[k], []).append(k)
+    bodies = [_bar_body(structure, k, plan, payloads, children) for k in children[0]]
+    connects = [f'<connect site1="{a}" site2="{b}"/>' for a, b in plan.connects]
     name = quoteattr(structure.scene.get("name", "tensegrity"))
     s = settings
     return f"""<mujoco model={name}>
@@ -238,7 +341,7 @@ def mjcf(structure: Structure, settings: MujocoSettings = MujocoSettings()) -> s
     {''.join(bodies)}
   </worldbody>
   <equality>
-    {chr(10).join('    ' + j for j in _joints(structure))}
+    {chr(10).join('    ' + c for c in connects)}
   </equality>
   <tendon>
     {chr(10).join('    ' + c for c in _cables(structure, sites))}
@@ -252,6 +355,9 @@ def mjcf(structure: Structure, settings: MujocoSettings = MujocoSettings()) -> s
 
 def build(structure: Structure, settings: MujocoSettings = MujocoSettings()) -> mujoco.MjModel:
     return mujoco.MjModel.from_xml_string(mjcf(structure, settings))
+
+
+STATE_SPEC = mujoco.mjtState.mjSTATE_FULLPHYSICS
 
 
 class NodeReader:
@@ -268,9 +374,6 @@ class NodeReader:
         mujoco.mj_setState(self.model, self.data, state, STATE_SPEC)
         mujoco.mj_kinematics(self.model, self.data)
         return self.data.site_xpos[self.site_ids].copy()
-
-
-STATE_SPEC = mujoco.mjtState.mjSTATE_FULLPHYSICS
 
 
 def initial_state(model: mujoco.MjModel) -> np.ndarray:

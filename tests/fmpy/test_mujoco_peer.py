@@ -5,9 +5,9 @@ integrate the same mechanics: here tower20 under the benchmark's loads (1 N +x o
 nodes) in MuJoCo, written from the FMU's scene and parameters, against the built FMU.
 Static checks (mass, start geometry, rest lengths, start tensions) are exact up to
 round-off; over 0.5 s the node positions agree to TRAJECTORY_TOLERANCE, what MuJoCo's soft
-joints allow (about 1e-7 m at the time constant used; the tower moves 0.12 m). Each
-deliberate error in the MJCF (a cable's stiffness, gravity, a mass, a rest length, a load)
-must break the agreement.
+joints allow (about 1e-7 m at the time constant used; the tower moves 0.12 m), and to
+1e-9 m when the joints are MuJoCo ball joints (exact). Each deliberate error in the MJCF
+(a cable's stiffness, gravity, a mass, a rest length, a load) must break the agreement.
 """
 
 import copy
@@ -53,10 +53,10 @@ def mujoco_run(structure: Structure, forces: dict, settings=MUJOCO) -> np.ndarra
     data = mujoco.MjData(model)
     start = mujoco_model.initial_state(model)
     control = mujoco_model.controls(structure, forces)[None, None, :]
-    steps = round(SPAN / MUJOCO.timestep)
+    steps = round(SPAN / settings.timestep)
     states, _ = rollout.rollout(model, data, start[None], control, nstep=steps)
     reader = mujoco_model.NodeReader(model, structure)
-    every = round(INTERVAL / MUJOCO.timestep)
+    every = round(INTERVAL / settings.timestep)
     return np.array([reader.positions(start)] + [reader.positions(s) for s in states[0, every - 1 :: every]])
 
 
@@ -115,6 +115,33 @@ def test_the_difference_is_the_soft_joints(tower, project_run):
     soft = max_distance(mujoco_run(structure, forces, softer), project_run)
     print(f"\nd = 0.9999: {stiff:.2e} m, d = 0.999: {soft:.2e} m")
     assert 9 < soft / stiff < 11
+
+
+def test_with_exact_joints_the_difference_is_the_step_error(tower, project_run):
+    """The same tower as a tree of ball joints (exact joints, no equalities): MuJoCo RK4 at
+    1 ms then follows the FMU to the two runs' step errors (measured 4.4e-10 m), so the
+    mechanics (masses, inertias, cables, loads) are the same."""
+    _, structure, forces = tower
+    tree = replace(MUJOCO, joints="tree")
+    assert mujoco_model.build(structure, tree).neq == 0, "a tower's bars form a tree"
+    error = max_distance(mujoco_run(structure, forces, tree), project_run)
+    print(f"\nball-joint tree, MuJoCo RK4 1 ms vs the FMU: {error:.2e} m")
+    assert error <= 1e-9
+
+
+@pytest.mark.parametrize("name", ["prism2-elastic", "icosahedron"])
+def test_the_mapping_carries_to_the_other_elastic_scenes(fmus, name):
+    """The MJCF writer is general: the prism (joints and pins) and the icosahedron (no
+    joints, a pinned face) pushed along (1, 0.5, 0) N on their force-input nodes."""
+    fmu = ProjectFmu(fmus.builtin(name).path)
+    structure = Structure(fmu.scene, fmu.starts)
+    forces = {node: (1.0, 0.5, 0.0) for node in fmu.scene["force_inputs"]}
+    project = fmu.sampled(Solver("dopri5", rtol=1e-11, atol=1e-11), forces, SPAN, INTERVAL)[1]
+    fine = replace(MUJOCO, joints="tree", timestep=2.5e-4)
+    assert max_distance(project, project[:1]) > 0.03
+    assert max_distance(mujoco_run(structure, forces, fine), project) <= 1e-10  # measured 2e-11
+    soft = max_distance(mujoco_run(structure, forces), project)
+    assert soft <= 1e-7, f"connect equalities: {soft:.2e} m"  # measured 2e-8 to 5e-8
 
 
 def _mutated(structure: Structure, what: str) -> Structure:
