@@ -38,9 +38,6 @@ TOP_LOAD = (1.0, 0.0, 0.0)  # N on each force-input node, as `tensegrity-fmu ben
 TIMING_SPAN, TIMING_STEP = 10.0, 1e-3
 SAMPLE_INTERVAL = 0.01  # s between the positions compared in the work-precision sweep
 TARGETS = (1e-3, 1e-5, 1e-7)  # m
-# MuJoCo's equality time constant: the smallest it accepts at a 1 ms step (2 steps), kept
-# for every step size so that all MuJoCo runs integrate one model.
-MUJOCO_SOLREF = (0.002, 1.0)
 # The bars as free bodies held by connect equalities (the general mapping), and as a tree
 # of ball joints (exact joints; a tower's bars form one, so it needs no equalities).
 JOINTS = ("equality", "tree")
@@ -59,9 +56,7 @@ class Case:
     forces: dict
 
     def mujoco_model(self, integrator: str, timestep: float, joints: str) -> mujoco.MjModel:
-        settings = MujocoSettings(
-            timestep=timestep, integrator=integrator, solref=MUJOCO_SOLREF, joints=joints
-        )
+        settings = MujocoSettings(timestep=timestep, integrator=integrator, joints=joints)
         return mujoco_model.build(self.structure, settings)
 
 
@@ -273,7 +268,7 @@ def work_precision_rows(case: Case, span: float, repeats: int) -> list:
               f"from the project's reference by {max_error(own_ref, project_ref):.2e} m.")
         rows += [Row(run, max_error(run.positions, project_ref), max_error(run.positions, own_ref),
                      run is peer[-1]) for run in peer]
-    print(f"The equality model's joints are soft (solref {MUJOCO_SOLREF[0]:g} s, solimp d = "
+    print(f"The equality model's joints are soft (solref {MujocoSettings().solref[0]:g} s, solimp d = "
           f"{MujocoSettings().solimp[0]:g}) and give under load, so none of its runs gets much "
           f"closer than its reference to the project's; the ball-joint tree's joints are "
           f"exact.\n")

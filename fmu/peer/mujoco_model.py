@@ -42,9 +42,10 @@ class MujocoSettings:
     # only where bars close a loop (none in a tower).
     joints: str = "equality"
     # Equality softness: impedance d = 0.9999 (MuJoCo's largest) makes a joint carry all
-    # but 1e-4 of the load that would pull it apart; the time constant sets how fast the
-    # remaining violation is pulled back (it must stay >= 2 timesteps).
-    solref: tuple = (0.02, 1.0)
+    # but 1e-4 of the load that would pull it apart; the time constant (0.002 s: the
+    # smallest MuJoCo accepts at a 1 ms step, 2 steps) sets how fast the remaining
+    # violation is pulled back. The give goes as (1 − d) τ².
+    solref: tuple = (0.002, 1.0)
     solimp: tuple = (0.9999, 0.9999, 0.001, 0.5, 2.0)
     solver: str = "Newton"
     iterations: int = 100
