@@ -130,20 +130,19 @@ class ProjectFmu:
         return wall, out
 
 
-def cli_simulate(scene: str, solver: Solver, forces: dict, span: float, interval: float):
-    """Runs `tensegrity-fmu simulate` with the forces as an inputs table and node positions
-    only. Returns (process wall time s, CSV path). The CSV lives in a temporary folder."""
-    work = Path(tempfile.mkdtemp(prefix="peer-cli-"))
+def cli_simulate(scene: str, solver: Solver, forces: dict, span: float, interval: float) -> float:
+    """Process wall time (s) of `tensegrity-fmu simulate` with the forces as an inputs table;
+    its CSV is written to a temporary folder and dropped."""
     names = [f"node[{n}].f{a}" for n in forces for a in "xyz"]
     values = [f[i] for f in forces.values() for i in range(3)]
-    inputs = work / "inputs.csv"
-    inputs.write_text("time," + ",".join(names) + "\n0," + ",".join(map(repr, values)) + "\n")
-    out = work / "run.csv"
-    command = [
-        str(CLI), "simulate", scene, "--time", repr(span), "--interval", repr(interval),
-        "--method", solver.method, "--step-size", repr(solver.step_size),
-        "--inputs", str(inputs), "-o", str(out),
-    ]
-    started = time.perf_counter()
-    subprocess.run(command, check=True, capture_output=True)
-    return time.perf_counter() - started, out
+    with tempfile.TemporaryDirectory(prefix="peer-cli-") as folder:
+        inputs = Path(folder, "inputs.csv")
+        inputs.write_text("time," + ",".join(names) + "\n0," + ",".join(map(repr, values)) + "\n")
+        command = [
+            str(CLI), "simulate", scene, "--time", repr(span), "--interval", repr(interval),
+            "--method", solver.method, "--step-size", repr(solver.step_size),
+            "--inputs", str(inputs), "-o", str(Path(folder, "run.csv")),
+        ]
+        started = time.perf_counter()
+        subprocess.run(command, check=True, capture_output=True)
+        return time.perf_counter() - started
