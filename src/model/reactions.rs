@@ -26,6 +26,9 @@ struct Contribution {
     diagonal: f64,
     /// `coef · c_ij`, the factor of `−u uᵀ`.
     along: f64,
+    /// The first contribution to its sparse slot in assembly order: it sets the block
+    /// instead of adding to it, so K needs no zeroing pass.
+    first: bool,
 }
 
 /// How K is stored and solved.
@@ -54,6 +57,8 @@ pub struct Reactions {
     /// The bar vectors and `1/|b|²` K was last assembled for (to assemble it again after a
     /// failed factorization, which overwrites it).
     directions: Vec<(Vector3<f64>, f64)>,
+    /// Sparse slots no contribution sets (see [`Contribution::first`]).
+    unassigned: Vec<usize>,
 }
 
 impl Reactions {
@@ -92,20 +97,30 @@ impl Reactions {
             Solver::Sparse(chol) => chol.k_index(row, col).expect("block is in the pattern"),
             Solver::Dense(_) => 3 * col * n + 3 * row,
         };
+        let slots = match &solver {
+            Solver::Sparse(chol) => chol.k_values.len(),
+            Solver::Dense(_) => 0,
+        };
+        let mut assigned = vec![false; slots];
         let mut bar_start = vec![0];
         let mut contributions = Vec::new();
         for (bar, t) in touching.iter().enumerate() {
             for (a, b) in pairs(t) {
                 let coef = a.1 * b.1;
                 let (w, c) = inertia[bar].compliance_scalars(a.2, b.2);
+                let slot = slot(a.0, b.0);
+                let first = !dense && !std::mem::replace(&mut assigned[slot], true);
                 contributions.push(Contribution {
-                    slot: slot(a.0, b.0),
+                    slot,
                     diagonal: w * coef,
                     along: c * coef,
+                    first,
                 });
             }
             bar_start.push(contributions.len());
         }
+        // Fill-in, and blocks of columns no moving bar touches: zeroed before each assembly.
+        let unassigned = (0..slots).filter(|&p| !assigned[p]).collect();
         let mut term_start = vec![0];
         let mut terms = Vec::new();
         for col in &coords.constraints {
@@ -121,6 +136,7 @@ impl Reactions {
             term_start,
             terms,
             directions: vec![(Vector3::zeros(), 0.0); n_bars],
+            unassigned,
         }
     }
 
@@ -161,10 +177,15 @@ impl Reactions {
         }
     }
 
-    /// Zeroes K, before [`Self::add_bar`] for every bar.
+    /// Readies K for [`Self::add_bar`] of every bar in order (sparse: zeroes only the slots
+    /// no bar sets).
     pub fn clear(&mut self) {
         match &mut self.solver {
-            Solver::Sparse(chol) => chol.k_values.fill(Matrix3::zeros()),
+            Solver::Sparse(chol) => {
+                for &p in &self.unassigned {
+                    chol.k_values[p] = Matrix3::zeros();
+                }
+            }
             Solver::Dense(values) => values.fill(0.0),
         }
     }
@@ -191,7 +212,12 @@ impl Reactions {
         match &mut self.solver {
             Solver::Sparse(chol) => {
                 for c in contributions {
-                    chol.k_values[c.slot] += block(c);
+                    let k = &mut chol.k_values[c.slot];
+                    if c.first {
+                        *k = block(c);
+                    } else {
+                        *k += block(c);
+                    }
                 }
             }
             Solver::Dense(values) => {
