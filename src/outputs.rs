@@ -6,6 +6,9 @@ use std::io::Write;
 pub use crate::scene::OutputGroup;
 use crate::sim::Simulation;
 
+mod row_thread;
+pub use row_thread::RowThread;
+
 /// A reportable value.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Quantity {
@@ -253,13 +256,14 @@ pub fn write_header(w: &mut impl Write, table: &[Output]) -> std::io::Result<()>
 
 /// Writes CSV rows: the time, then each output, as [`write_number`] writes them. A row is
 /// formatted into a buffer sized once for the longest possible row of its table, so
-/// writing rows allocates nothing, and handed to the writer in one piece.
+/// writing rows allocates nothing, and handed to the writer in one piece. [`RowThread`]
+/// writes the same bytes from a thread of its own.
 #[derive(Debug)]
 pub struct RowWriter {
     line: Vec<u8>,
 }
 
-/// Longest text of one value: `-2.2250738585072014e-308` and a comma.
+/// Longest text of one value, `-2.2250738585072014e-308`, and the comma or newline after it.
 const MAX_CELL: usize = 25;
 
 impl RowWriter {
@@ -277,17 +281,35 @@ impl RowWriter {
         table: &[Output],
         sim: &Simulation,
     ) -> std::io::Result<()> {
-        let mut digits = zmij::Buffer::new();
-        let line = &mut self.line;
-        line.clear();
-        line.extend_from_slice(number(&mut digits, sim.time()).as_bytes());
-        for o in table {
-            line.push(b',');
-            line.extend_from_slice(number(&mut digits, o.quantity.value(sim)).as_bytes());
-        }
-        line.push(b'\n');
-        w.write_all(line)
+        let values = std::iter::once(sim.time()).chain(table.iter().map(|o| o.quantity.value(sim)));
+        self.write_values(w, values)
     }
+
+    /// Writes one row of `values` (the time first) as [`Self::write_row`] writes them.
+    pub fn write_values(
+        &mut self,
+        w: &mut impl Write,
+        values: impl IntoIterator<Item = f64>,
+    ) -> std::io::Result<()> {
+        self.line.clear();
+        push_row(&mut self.line, values);
+        w.write_all(&self.line)
+    }
+}
+
+/// Appends one CSV line to `line`: `values` as [`number`] writes them, separated by commas,
+/// and a newline. The one place a row's text is made, so every writer writes the same bytes.
+fn push_row(line: &mut Vec<u8>, values: impl IntoIterator<Item = f64>) {
+    let mut digits = zmij::Buffer::new();
+    let mut values = values.into_iter();
+    if let Some(first) = values.next() {
+        line.extend_from_slice(number(&mut digits, first).as_bytes());
+    }
+    for x in values {
+        line.push(b',');
+        line.extend_from_slice(number(&mut digits, x).as_bytes());
+    }
+    line.push(b'\n');
 }
 
 /// Writes a number as people write it: the shortest decimal that reads back as the same
