@@ -10,6 +10,7 @@ use std::path::PathBuf;
 use tensegrity_fmu::partial::Partial;
 
 use tensegrity_fmu::integrator::Method;
+use tensegrity_fmu::outputs::RowThread;
 use tensegrity_fmu::scene::Scene;
 use tensegrity_fmu::{outputs, Simulation, StepError};
 
@@ -93,7 +94,9 @@ pub fn simulate(scene: Scene, request: Request) -> Result<(), String> {
     let io = |e: std::io::Error| format!("writing {}: {e}", path.display());
     let mut w = BufWriter::new(file);
     outputs::write_header(&mut w, &table).map_err(io)?;
-    let mut rows = outputs::RowWriter::new(&table);
+    // Formatting a row costs most of a step: a thread of its own does it. On an error
+    // below, dropping `rows` stops it before `partial` removes the file.
+    let mut rows = RowThread::spawn(w, &table).map_err(io)?;
     let warned = unstable.as_deref();
     let evaluate = outputs::needs_evaluation(&table);
     run(
@@ -103,8 +106,9 @@ pub fn simulate(scene: Scene, request: Request) -> Result<(), String> {
         interval,
         warned,
         evaluate,
-        |sim| rows.write_row(&mut w, &table, sim).map_err(io),
+        |sim| rows.send_row(&table, sim).map_err(io),
     )?;
+    let w = rows.finish().map_err(io)?;
     drop(w.into_inner().map_err(|e| io(e.into_error()))?);
     partial.commit()?;
     println!("{}", path.display());
