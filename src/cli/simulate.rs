@@ -106,7 +106,7 @@ pub fn simulate(scene: Scene, request: Request) -> Result<(), String> {
         interval,
         warned,
         evaluate,
-        |sim| rows.send_row(&table, sim).map_err(io),
+        |sim| rows.send_row(sim).map_err(io),
     )?;
     let w = rows.finish().map_err(io)?;
     drop(w.into_inner().map_err(|e| io(e.into_error()))?);

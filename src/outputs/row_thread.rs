@@ -1,5 +1,6 @@
 //! CSV rows formatted and written on a thread of their own, so that the stepping thread
-//! only copies a row's values (formatting 574 doubles costs most of a tower20 step).
+//! only copies a row's values (formatting tower20's 574 doubles costs more than half of a
+//! step).
 //!
 //! The values travel in chunks of whole rows from a fixed pool: the stepping thread fills
 //! a free chunk and sends it, the writer formats it, sends it back and writes the text.
@@ -15,20 +16,24 @@ use std::io::{self, Write};
 use std::sync::mpsc::{sync_channel, Receiver, SyncSender};
 use std::thread::{self, JoinHandle};
 
-use super::{push_row, Output, MAX_CELL};
+use super::{push_row, Output, RowReader, MAX_CELL};
 use crate::sim::Simulation;
 
-/// Values per chunk (at least one row): tower20's 575-value rows go 14 to a chunk.
-const CHUNK_VALUES: usize = 8192;
-/// Values of all chunks together, when that still leaves two chunks (one being filled,
-/// one being written).
-const POOL_VALUES: usize = 8 * CHUNK_VALUES;
+/// Values per chunk (at least one row): tower20's 575-value rows go 56 to a chunk. Large,
+/// because waking the writer costs the stepping thread several µs (an interrupt to the
+/// other core: about 10 µs on a 2-vCPU virtual machine), paid once per chunk.
+const CHUNK_VALUES: usize = 1 << 15;
+/// Values of all chunks together (1 MB), when that still leaves two chunks (one being
+/// filled, one being written).
+const POOL_VALUES: usize = 4 * CHUNK_VALUES;
 
 /// Rows handed to a writer thread that formats them as [`RowWriter`](super::RowWriter)
-/// does and writes them to `W`. Handing a row over allocates nothing. [`Self::finish`]
+/// does and writes them to `W`. Handing a row over allocates nothing (but the first wait
+/// for a free chunk, where std's channel sets up its waiter, once). [`Self::finish`]
 /// returns the writer; dropping it without finishing stops the thread and discards the
 /// rows not yet written.
 pub struct RowThread<W: Write + Send + 'static> {
+    reader: RowReader,
     row_len: usize,
     chunk_len: usize,
     /// The chunk being filled, taken from `free`.
@@ -59,6 +64,7 @@ impl<W: Write + Send + 'static> RowThread<W> {
             .name("csv-writer".into())
             .spawn(move || write_chunks(w, &to_format, &written, row_len, chunk_len))?;
         Ok(Self {
+            reader: RowReader::new(table),
             row_len,
             chunk_len,
             chunk: None,
@@ -68,21 +74,20 @@ impl<W: Write + Send + 'static> RowThread<W> {
         })
     }
 
-    /// Hands over one row for the current state of `sim` (whose outputs are fresh), read
-    /// from the same `table` as the thread was started for. An error is the writer's: its
-    /// write failed, or it panicked.
-    pub fn send_row(&mut self, table: &[Output], sim: &Simulation) -> io::Result<()> {
-        assert_eq!(table.len() + 1, self.row_len, "a row of another table");
-        self.send_with(|chunk| {
-            chunk.push(sim.time());
-            chunk.extend(table.iter().map(|o| o.quantity.value(sim)));
-        })
+    /// Hands over one row for the current state of `sim` (whose outputs are fresh). An
+    /// error is the writer's: its write failed, or it panicked.
+    pub fn send_row(&mut self, sim: &Simulation) -> io::Result<()> {
+        let mut chunk = self.take_chunk()?;
+        self.reader.read(sim, &mut chunk);
+        self.put_back(chunk)
     }
 
     /// Hands over one row of `values` (the time first) as [`Self::send_row`] does.
     pub fn send_values(&mut self, values: &[f64]) -> io::Result<()> {
         assert_eq!(values.len(), self.row_len, "a row of another length");
-        self.send_with(|chunk| chunk.extend_from_slice(values))
+        let mut chunk = self.take_chunk()?;
+        chunk.extend_from_slice(values);
+        self.put_back(chunk)
     }
 
     /// Sends the rows not sent yet, waits until all are written and flushed, and returns
@@ -96,20 +101,26 @@ impl<W: Write + Send + 'static> RowThread<W> {
         self.join()
     }
 
-    /// Appends a row with `fill` to the current chunk, and sends the chunk once full.
-    fn send_with(&mut self, fill: impl FnOnce(&mut Vec<f64>)) -> io::Result<()> {
-        if self.chunk.is_none() {
+    /// The chunk being filled, or a free one.
+    fn take_chunk(&mut self) -> io::Result<Vec<f64>> {
+        if self.filled.is_none() {
+            // Free chunks may be left, but the writer has stopped.
+            return Err(already_stopped());
+        }
+        match self.chunk.take() {
+            Some(chunk) => Ok(chunk),
             // Blocks while the writer holds every chunk: back-pressure from a slow disk.
-            let chunk = self.free.recv().map_err(|_| self.stopped())?;
+            None => self.free.recv().map_err(|_| self.stopped()),
+        }
+    }
+
+    /// Keeps the chunk to fill further, or sends it once full.
+    fn put_back(&mut self, chunk: Vec<f64>) -> io::Result<()> {
+        if chunk.len() < self.chunk_len {
             self.chunk = Some(chunk);
+            return Ok(());
         }
-        let chunk = self.chunk.as_mut().expect("taken above");
-        fill(chunk);
-        if chunk.len() == self.chunk_len {
-            let full = self.chunk.take().expect("filled above");
-            self.send_chunk(full)?;
-        }
-        Ok(())
+        self.send_chunk(chunk)
     }
 
     fn send_chunk(&mut self, chunk: Vec<f64>) -> io::Result<()> {
