@@ -22,6 +22,8 @@
 //!   [`BLOCK`] steps, one without rows and one with a row handed over after every step (or
 //!   every 10th), interleaved; the median over the pairs of the difference per row (which
 //!   includes what the rows do to the steps' caches), and of the time inside `send_row`;
+//!   and the same with the rows only read into a buffer, no writer thread: the floor of
+//!   any scheme that copies the values out, so that what the hand-over adds shows;
 //! - the writer thread's own CPU time per row: the process's CPU time less the stepping
 //!   thread's, over all rows handed over (the formatting moved to the other core, it did
 //!   not vanish).
@@ -71,6 +73,14 @@ pub fn run(seconds: f64, repeats: usize) -> Result<(), String> {
     println!("| what | µs | ratio to a step |");
     println!("|---|---:|---:|");
     let [every_step, every_10th] = &c.threaded;
+    let [read_every_step, read_every_10th] = &c.read_only;
+    let read_only = |what: &str, h: &Handover| {
+        format!(
+            "the same rows only read into a buffer after {what}, no writer thread (the \
+             floor; median of {} pairs)",
+            h.pairs
+        )
+    };
     let handed = |what: &str, h: &Handover| {
         format!(
             "CSV row handed to the writer thread after {what}: the stepping thread's cost \
@@ -109,10 +119,18 @@ pub fn run(seconds: f64, repeats: usize) -> Result<(), String> {
             "of which inside `RowThread::send_row`".into(),
             every_step.inside,
         ),
+        (
+            read_only("every step", read_every_step),
+            read_every_step.per_row,
+        ),
         (handed("every 10th step", every_10th), every_10th.per_row),
         (
             "of which inside `RowThread::send_row`".into(),
             every_10th.inside,
+        ),
+        (
+            read_only("every 10th step", read_every_10th),
+            read_every_10th.per_row,
         ),
         (
             "the writer thread's CPU per row (formatting it, taking and returning its chunk; \
@@ -146,12 +164,14 @@ struct Costs {
     reader_values: f64,
     /// Rows handed to the writer thread after every step, then after every 10th.
     threaded: [Handover; 2],
+    /// The same rows only read into a buffer.
+    read_only: [Handover; 2],
     /// The writer thread's CPU time per row, µs (a mean over all rows).
     writer_cpu: f64,
 }
 
-/// What a row handed to the writer thread costs the stepping thread, µs: medians over
-/// `pairs` pairs of blocks.
+/// What a row handed to the writer thread (or only read) costs the stepping thread, µs:
+/// medians over `pairs` pairs of blocks.
 struct Handover {
     /// A block with rows less the block without, per row.
     per_row: f64,
@@ -189,13 +209,36 @@ fn median(xs: &mut [f64]) -> f64 {
 /// The writer thread as benchmarked: its text goes nowhere.
 type BenchThread = RowThread<BufWriter<Sink>>;
 
-/// Rows handed to `thread` after every `every`-th step.
+/// What happens to a row after every `every`-th step.
 struct Rows<'a> {
-    thread: &'a mut BenchThread,
+    sink: RowSink<'a>,
     every: u64,
 }
 
-/// `n` steps, with `rows` handed over: the seconds spent inside `send_row`, and the rows.
+enum RowSink<'a> {
+    /// Handed to the writer thread, as `simulate` does.
+    Thread(&'a mut BenchThread),
+    /// Only read into a buffer: the floor of any scheme that copies the values out.
+    ReadOnly(&'a RowReader, &'a mut Vec<f64>),
+}
+
+impl RowSink<'_> {
+    fn take(&mut self, sim: &Simulation) -> Result<(), String> {
+        match self {
+            Self::Thread(thread) => thread
+                .send_row(sim)
+                .map_err(|e| format!("writing the benchmark rows: {e}")),
+            Self::ReadOnly(reader, values) => {
+                values.clear();
+                reader.read(sim, values);
+                std::hint::black_box(&**values);
+                Ok(())
+            }
+        }
+    }
+}
+
+/// `n` steps, with `rows`: the seconds spent on them (inside `send_row`), and their number.
 fn steps(sim: &mut Simulation, n: u64, mut rows: Option<&mut Rows>) -> Result<(f64, u64), String> {
     let mut inside = 0.0;
     let mut handed = 0;
@@ -203,9 +246,7 @@ fn steps(sim: &mut Simulation, n: u64, mut rows: Option<&mut Rows>) -> Result<(f
         sim.advance(1, STEP).map_err(|e| e.to_string())?;
         if let Some(rows) = rows.as_deref_mut().filter(|r| i % r.every == 0) {
             let started = Instant::now();
-            rows.thread
-                .send_row(sim)
-                .map_err(|e| format!("writing the benchmark rows: {e}"))?;
+            rows.sink.take(sim)?;
             inside += started.elapsed().as_secs_f64();
             handed += 1;
         }
@@ -309,17 +350,19 @@ fn measure(
     let mut thread: BenchThread =
         RowThread::spawn(BufWriter::new(std::io::sink()), table).map_err(io)?;
     let mut pairs = [Pairs::default(), Pairs::default()];
+    let mut read_only = [Pairs::default(), Pairs::default()];
     let mut handed_in_all = 0;
     let budget = seconds / repeats as f64;
     for _ in 0..repeats {
         let us = timed(budget, 100, |n| steps(sim, n, None).map(drop))?;
         best[0] = best[0].min(us);
-        for (pairs, every) in pairs.iter_mut().zip(SPACINGS) {
-            let rows = Rows {
-                thread: &mut thread,
-                every,
-            };
-            handed_in_all += time_pairs(sim, rows, budget, pairs)?;
+        for (i, every) in SPACINGS.into_iter().enumerate() {
+            let sink = RowSink::Thread(&mut thread);
+            let rows = Rows { sink, every };
+            handed_in_all += time_pairs(sim, rows, budget, &mut pairs[i])?;
+            let sink = RowSink::ReadOnly(&reader, &mut values);
+            let rows = Rows { sink, every };
+            time_pairs(sim, rows, budget, &mut read_only[i])?;
         }
         let us = timed(budget, 100, |n| {
             for _ in 0..n {
@@ -382,6 +425,7 @@ fn measure(
         positions,
         reader_values,
         threaded: pairs.map(Pairs::medians),
+        read_only: read_only.map(Pairs::medians),
         writer_cpu,
     })
 }
