@@ -1,7 +1,8 @@
 //! CSV rows: writing them allocates nothing once the row buffer has grown (a counting
 //! global allocator watches `RowWriter::write_row` and `RowThread::send_row` on tower20,
-//! 574 columns), the writer thread writes the very bytes `RowWriter` writes, and its
-//! failures (a write error, a panic) come back as errors without hanging.
+//! 574 columns), `RowReader` reads the bits each output reads, the writer thread writes the
+//! very bytes `RowWriter` writes, and its failures (a write error, a panic) come back as
+//! errors without hanging.
 
 mod alloc_support;
 use alloc_support::{allocations, watch_this_thread};
@@ -17,6 +18,13 @@ use tensegrity_fmu::{Model, Simulation};
 /// Held by the tests that count allocations: the count is the watched threads' together.
 static COUNTING: Mutex<()> = Mutex::new(());
 
+/// Holds [`COUNTING`] (whether or not another counting test failed).
+fn counting_alone() -> std::sync::MutexGuard<'static, ()> {
+    COUNTING
+        .lock()
+        .unwrap_or_else(|poisoned| poisoned.into_inner())
+}
+
 /// tower20 pushed sideways at node 1, and its outputs.
 fn tower20() -> (Simulation, Vec<Output>) {
     let mut sim = Simulation::new(Model::new(&builtin("tower20").unwrap()).unwrap());
@@ -27,7 +35,7 @@ fn tower20() -> (Simulation, Vec<Output>) {
 
 #[test]
 fn rows_allocate_nothing_after_the_first() {
-    let _counting = COUNTING.lock().unwrap();
+    let _counting = counting_alone();
     watch_this_thread();
     let (mut sim, table) = tower20();
     // A writer that drops the bytes: the allocations counted are the row's own.
@@ -105,7 +113,7 @@ fn handing_rows_to_the_writer_thread_allocates_nothing() {
     let (mut sim, table) = tower20();
     sim.advance_to(1e-3).unwrap();
     sim.refresh();
-    let _counting = COUNTING.lock().unwrap();
+    let _counting = counting_alone();
     watch_this_thread();
     // Rows of a state that does not change are handed over faster than even io::sink()'s
     // writer formats them (and far faster than a slow disk's), so the warm-up fills the

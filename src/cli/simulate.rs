@@ -3,7 +3,9 @@
 //! Rows are at `k · --interval` (computed as a product, not a running sum) and at
 //! `--time`; between them `Simulation::advance_to` integrates exactly as `fmi2DoStep` does
 //! (steps of `solver.step_size`, the last one shortened). With `--inputs`, the
-//! communication points and input values are fmpy's (see [`super::inputs`]).
+//! communication points and input values are fmpy's (see [`super::inputs`]). The rows are
+//! formatted and written by a thread of their own (`outputs::RowThread`), the same bytes
+//! as on the stepping thread.
 
 use std::io::BufWriter;
 use std::path::PathBuf;
