@@ -116,7 +116,7 @@ pub fn run(seconds: f64, repeats: usize) -> Result<(), String> {
         ),
         (handed("every step", every_step), every_step.per_row),
         (
-            "of which inside `RowThread::send_row`".into(),
+            "time inside `RowThread::send_row` itself (timed around each call; median)".into(),
             every_step.inside,
         ),
         (
@@ -125,7 +125,7 @@ pub fn run(seconds: f64, repeats: usize) -> Result<(), String> {
         ),
         (handed("every 10th step", every_10th), every_10th.per_row),
         (
-            "of which inside `RowThread::send_row`".into(),
+            "time inside `RowThread::send_row` itself (timed around each call; median)".into(),
             every_10th.inside,
         ),
         (
