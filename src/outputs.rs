@@ -3,8 +3,13 @@
 
 use std::io::Write;
 
+use nalgebra::Vector3;
+
 pub use crate::scene::OutputGroup;
 use crate::sim::Simulation;
+
+mod row_thread;
+pub use row_thread::RowThread;
 
 /// A reportable value.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -111,6 +116,94 @@ fn node_from_state(sim: &Simulation, n: usize, axis: usize, position: bool) -> f
         None if position => model.positions[n][axis],
         None => 0.0,
     }
+}
+
+/// Reads a table's values faster than output by output: the three position (or velocity)
+/// components of a node, one after the other as [`outputs`] lists them, are read together
+/// as the kinematics computes them ([`Coordinates::end_vector`]), which shares the node's
+/// lookups; the same bits as [`Quantity::value`].
+///
+/// [`Coordinates::end_vector`]: crate::model::coords::Coordinates::end_vector
+#[derive(Debug, Clone)]
+pub struct RowReader {
+    reads: Vec<Read>,
+}
+
+#[derive(Debug, Clone, Copy)]
+enum Read {
+    /// A node's position (with `position`) or velocity, all three axes.
+    Node {
+        node: usize,
+        position: bool,
+    },
+    One(Quantity),
+}
+
+impl RowReader {
+    /// A reader for `table`.
+    pub fn new(table: &[Output]) -> Self {
+        let mut reads = Vec::new();
+        let mut rest = table;
+        while let Some(first) = rest.first() {
+            let (read, taken) = match node_at(rest) {
+                Some(read) => (read, 3),
+                None => (Read::One(first.quantity), 1),
+            };
+            reads.push(read);
+            rest = &rest[taken..];
+        }
+        Self { reads }
+    }
+
+    /// Appends the time, then each value of the table, to `out`.
+    pub fn read(&self, sim: &Simulation, out: &mut Vec<f64>) {
+        out.push(sim.time());
+        for read in &self.reads {
+            match *read {
+                Read::Node { node, position } => push_node(sim, node, position, out),
+                Read::One(q) => out.push(q.value(sim)),
+            }
+        }
+    }
+}
+
+/// The node whose x, y, z (positions or velocities) start `table`, if they do.
+fn node_at(table: &[Output]) -> Option<Read> {
+    let [a, b, c, ..] = table else { return None };
+    let Some((node, 0, position)) = node_component(a.quantity) else {
+        return None;
+    };
+    let rest = [(b, 1), (c, 2)];
+    rest.iter()
+        .all(|(o, axis)| node_component(o.quantity) == Some((node, *axis, position)))
+        .then_some(Read::Node { node, position })
+}
+
+/// The node, axis and kind (`true`: position, `false`: velocity) of a node output.
+fn node_component(q: Quantity) -> Option<(usize, usize, bool)> {
+    match q {
+        Quantity::NodePosition(n, axis) => Some((n, axis, true)),
+        Quantity::NodeVelocity(n, axis) => Some((n, axis, false)),
+        _ => None,
+    }
+}
+
+/// Appends node `n`'s position (with `position`) or velocity, as [`node_from_state`]
+/// computes each of its components.
+fn push_node(sim: &Simulation, n: usize, position: bool, out: &mut Vec<f64>) {
+    let model = sim.model();
+    let coords = &model.coords;
+    let x = match coords.node_end[n] {
+        Some(e) => {
+            let y = &sim.state().y;
+            let (positions, velocities) = y.split_at(y.len() / 2);
+            let eta = if position { positions } else { velocities };
+            coords.end_vector(e, eta, position)
+        }
+        None if position => model.positions[n],
+        None => Vector3::zeros(),
+    };
+    out.extend_from_slice(x.as_slice());
 }
 
 /// Whether any output of `table` needs an evaluation ([`Quantity::needs_evaluation`]).
@@ -253,13 +346,14 @@ pub fn write_header(w: &mut impl Write, table: &[Output]) -> std::io::Result<()>
 
 /// Writes CSV rows: the time, then each output, as [`write_number`] writes them. A row is
 /// formatted into a buffer sized once for the longest possible row of its table, so
-/// writing rows allocates nothing, and handed to the writer in one piece.
+/// writing rows allocates nothing, and handed to the writer in one piece. [`RowThread`]
+/// writes the same bytes from a thread of its own.
 #[derive(Debug)]
 pub struct RowWriter {
     line: Vec<u8>,
 }
 
-/// Longest text of one value: `-2.2250738585072014e-308` and a comma.
+/// Longest text of one value, `-2.2250738585072014e-308`, and the comma or newline after it.
 const MAX_CELL: usize = 25;
 
 impl RowWriter {
@@ -277,17 +371,35 @@ impl RowWriter {
         table: &[Output],
         sim: &Simulation,
     ) -> std::io::Result<()> {
-        let mut digits = zmij::Buffer::new();
-        let line = &mut self.line;
-        line.clear();
-        line.extend_from_slice(number(&mut digits, sim.time()).as_bytes());
-        for o in table {
-            line.push(b',');
-            line.extend_from_slice(number(&mut digits, o.quantity.value(sim)).as_bytes());
-        }
-        line.push(b'\n');
-        w.write_all(line)
+        let values = std::iter::once(sim.time()).chain(table.iter().map(|o| o.quantity.value(sim)));
+        self.write_values(w, values)
     }
+
+    /// Writes one row of `values` (the time first) as [`Self::write_row`] writes them.
+    pub fn write_values(
+        &mut self,
+        w: &mut impl Write,
+        values: impl IntoIterator<Item = f64>,
+    ) -> std::io::Result<()> {
+        self.line.clear();
+        push_row(&mut self.line, values);
+        w.write_all(&self.line)
+    }
+}
+
+/// Appends one CSV line to `line`: `values` as [`number`] writes them, separated by commas,
+/// and a newline. The one place a row's text is made, so every writer writes the same bytes.
+fn push_row(line: &mut Vec<u8>, values: impl IntoIterator<Item = f64>) {
+    let mut digits = zmij::Buffer::new();
+    let mut values = values.into_iter();
+    if let Some(first) = values.next() {
+        line.extend_from_slice(number(&mut digits, first).as_bytes());
+    }
+    for x in values {
+        line.push(b',');
+        line.extend_from_slice(number(&mut digits, x).as_bytes());
+    }
+    line.push(b'\n');
 }
 
 /// Writes a number as people write it: the shortest decimal that reads back as the same

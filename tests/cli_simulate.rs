@@ -267,3 +267,53 @@ fn a_step_size_far_below_the_time_scale_is_refused_before_writing() {
         assert!(started.elapsed().as_secs() < 30);
     }
 }
+
+#[cfg(target_os = "linux")]
+#[test]
+fn a_full_disk_stops_the_run_with_the_file_named_and_no_csv_left() {
+    use std::os::unix::process::CommandExt;
+    let csv = temp("full.csv");
+    let mut command = std::process::Command::new(env!("CARGO_BIN_EXE_tensegrity-fmu"));
+    // 11 MB of rows, written by the writer thread, into a 1 MB file-size limit.
+    command.args([
+        "simulate",
+        "tower20",
+        "--time",
+        "1",
+        "--interval",
+        "0.001",
+        "-o",
+    ]);
+    command.arg(&csv);
+    // SAFETY: between fork and exec only async-signal-safe calls: a write past the limit
+    // then fails with EFBIG as on a full disk, instead of killing the process (SIGXFSZ).
+    unsafe {
+        command.pre_exec(|| {
+            libc::signal(libc::SIGXFSZ, libc::SIG_IGN);
+            let limit = libc::rlimit {
+                rlim_cur: 1 << 20,
+                rlim_max: 1 << 20,
+            };
+            if libc::setrlimit(libc::RLIMIT_FSIZE, &limit) != 0 {
+                return Err(std::io::Error::last_os_error());
+            }
+            Ok(())
+        });
+    }
+    let out = command.output().unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success());
+    assert_eq!(
+        err.trim_end(),
+        format!(
+            "error: writing {}: File too large (os error 27)",
+            csv.display()
+        )
+    );
+    let left: Vec<_> = std::fs::read_dir(csv.parent().unwrap())
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .filter(|n| n.contains("full"))
+        .collect();
+    assert!(left.is_empty(), "{left:?}");
+}

@@ -3,13 +3,16 @@
 //! Rows are at `k · --interval` (computed as a product, not a running sum) and at
 //! `--time`; between them `Simulation::advance_to` integrates exactly as `fmi2DoStep` does
 //! (steps of `solver.step_size`, the last one shortened). With `--inputs`, the
-//! communication points and input values are fmpy's (see [`super::inputs`]).
+//! communication points and input values are fmpy's (see [`super::inputs`]). The rows are
+//! formatted and written by a thread of their own (`outputs::RowThread`), the same bytes
+//! as on the stepping thread.
 
 use std::io::BufWriter;
 use std::path::PathBuf;
 use tensegrity_fmu::partial::Partial;
 
 use tensegrity_fmu::integrator::Method;
+use tensegrity_fmu::outputs::RowThread;
 use tensegrity_fmu::scene::Scene;
 use tensegrity_fmu::{outputs, Simulation, StepError};
 
@@ -93,7 +96,9 @@ pub fn simulate(scene: Scene, request: Request) -> Result<(), String> {
     let io = |e: std::io::Error| format!("writing {}: {e}", path.display());
     let mut w = BufWriter::new(file);
     outputs::write_header(&mut w, &table).map_err(io)?;
-    let mut rows = outputs::RowWriter::new(&table);
+    // Formatting a row costs most of a step: a thread of its own does it. On an error
+    // below, dropping `rows` stops it before `partial` removes the file.
+    let mut rows = RowThread::spawn(w, &table).map_err(io)?;
     let warned = unstable.as_deref();
     let evaluate = outputs::needs_evaluation(&table);
     run(
@@ -103,8 +108,9 @@ pub fn simulate(scene: Scene, request: Request) -> Result<(), String> {
         interval,
         warned,
         evaluate,
-        |sim| rows.write_row(&mut w, &table, sim).map_err(io),
+        |sim| rows.send_row(sim).map_err(io),
     )?;
+    let w = rows.finish().map_err(io)?;
     drop(w.into_inner().map_err(|e| io(e.into_error()))?);
     partial.commit()?;
     println!("{}", path.display());
