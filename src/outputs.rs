@@ -96,25 +96,23 @@ impl Quantity {
 /// Component `axis` of the position (with `position`) or velocity of node `n` from the
 /// state, as the evaluation's kinematics computes it: the same arithmetic, so the same bits.
 fn node_from_state(sim: &Simulation, n: usize, axis: usize, position: bool) -> f64 {
+    node_vector_from_state(sim, n, position)[axis]
+}
+
+/// The position (with `position`) or velocity of node `n` from the state, through the
+/// kinematics' own [`Coordinates::end_vector`](crate::model::coords::Coordinates::end_vector).
+fn node_vector_from_state(sim: &Simulation, n: usize, position: bool) -> Vector3<f64> {
     let model = sim.model();
-    let y = &sim.state().y;
-    let half = y.len() / 2;
-    let coords = &model.coords;
-    match coords.node_end[n] {
+    match model.coords.node_end[n] {
         Some(e) => {
-            let (eta, mut x) = if position {
-                (&y[..half], coords.fixed[e][axis])
-            } else {
-                (&y[half..], 0.0)
-            };
-            for &(g, c) in coords.row(e) {
-                x += eta[3 * g + axis] * c;
-            }
-            x
+            let y = &sim.state().y;
+            let (positions, velocities) = y.split_at(y.len() / 2);
+            let eta = if position { positions } else { velocities };
+            model.coords.end_vector(e, eta, position)
         }
         // A bar-less node is pinned: it stays where it starts.
-        None if position => model.positions[n][axis],
-        None => 0.0,
+        None if position => model.positions[n],
+        None => Vector3::zeros(),
     }
 }
 
@@ -160,7 +158,9 @@ impl RowReader {
         out.push(sim.time());
         for read in &self.reads {
             match *read {
-                Read::Node { node, position } => push_node(sim, node, position, out),
+                Read::Node { node, position } => {
+                    out.extend_from_slice(node_vector_from_state(sim, node, position).as_slice())
+                }
                 Read::One(q) => out.push(q.value(sim)),
             }
         }
@@ -186,24 +186,6 @@ fn node_component(q: Quantity) -> Option<(usize, usize, bool)> {
         Quantity::NodeVelocity(n, axis) => Some((n, axis, false)),
         _ => None,
     }
-}
-
-/// Appends node `n`'s position (with `position`) or velocity, as [`node_from_state`]
-/// computes each of its components.
-fn push_node(sim: &Simulation, n: usize, position: bool, out: &mut Vec<f64>) {
-    let model = sim.model();
-    let coords = &model.coords;
-    let x = match coords.node_end[n] {
-        Some(e) => {
-            let y = &sim.state().y;
-            let (positions, velocities) = y.split_at(y.len() / 2);
-            let eta = if position { positions } else { velocities };
-            coords.end_vector(e, eta, position)
-        }
-        None if position => model.positions[n],
-        None => Vector3::zeros(),
-    };
-    out.extend_from_slice(x.as_slice());
 }
 
 /// Whether any output of `table` needs an evaluation ([`Quantity::needs_evaluation`]).
