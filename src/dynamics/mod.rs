@@ -222,59 +222,86 @@ pub fn bar_response(model: &Model, ws: &mut Workspace) {
     if with_reactions {
         ws.reactions.clear();
     }
-    for i in 0..model.bars.len() {
-        let (a, b) = (2 * i, 2 * i + 1);
-        if model.coords.static_bar[i] {
-            ws.lambda[i] = 0.0;
-            ws.end_acc[a] = Vector3::zeros();
-            ws.end_acc[b] = Vector3::zeros();
+    let Workspace {
+        end_pos,
+        end_vel,
+        end_force,
+        end_acc,
+        lambda,
+        bars,
+        reactions,
+        ..
+    } = ws;
+    // Bar i's ends are 2i and 2i + 1: pairs of ends, zipped, need no index checks.
+    let ends = pairs(end_pos)
+        .iter()
+        .zip(pairs(end_vel))
+        .zip(pairs(end_force));
+    let out = pairs_mut(end_acc).iter_mut().zip(lambda).zip(bars);
+    let per_bar = model.coords.static_bar.iter().zip(&model.inertia);
+    for (i, ((&fixed, inertia), (((x, v), f), ((acc, lambda), cached)))) in
+        per_bar.zip(ends.zip(out)).enumerate()
+    {
+        if fixed {
+            *lambda = 0.0;
+            *acc = [Vector3::zeros(); 2];
             continue;
         }
-        let inertia = &model.inertia[i];
-        let bv = ws.end_pos[b] - ws.end_pos[a];
-        let bdot = ws.end_vel[b] - ws.end_vel[a];
+        let bv = x[1] - x[0];
+        let bdot = v[1] - v[0];
         // One division per bar: 1/|b|² serves K's u uᵀ and λ's denominator.
         let inv_l2 = 1.0 / bv.norm_squared();
-        let cached = (
+        *cached = (
             bv,
             -bdot.norm_squared(),
             inv_l2 * inertia.inv_beta_minus_alpha,
         );
-        ws.bars[i] = cached;
         if with_reactions {
-            ws.reactions.add_bar(i, &bv, inv_l2);
+            reactions.add_bar(i, &bv, inv_l2);
         }
-        respond(inertia, cached, ws, i);
+        (*lambda, *acc) = response(inertia, *cached, f);
     }
 }
 
 /// Stage 5: λ and the end accelerations again, for the end forces with the reactions,
 /// from what [`bar_response`] kept.
 fn bar_response_again(model: &Model, ws: &mut Workspace) {
-    for i in 0..model.bars.len() {
-        if !model.coords.static_bar[i] {
-            respond(&model.inertia[i], ws.bars[i], ws, i);
+    let out = pairs_mut(&mut ws.end_acc).iter_mut().zip(&mut ws.lambda);
+    let per_bar = model.coords.static_bar.iter().zip(&model.inertia);
+    let inputs = ws.bars.iter().zip(pairs(&ws.end_force));
+    for (((&fixed, inertia), (cached, f)), (acc, lambda)) in per_bar.zip(inputs).zip(out) {
+        if !fixed {
+            (*lambda, *acc) = response(inertia, *cached, f);
         }
     }
 }
 
-/// λ of bar `i` (as [`crate::model::inertia::BarInertia::lambda`], with `b`, `−|ḃ|²` and
-/// the reciprocal of its denominator given) and its end accelerations.
+/// λ of a bar (as [`crate::model::inertia::BarInertia::lambda`], with `b`, `−|ḃ|²` and the
+/// reciprocal of its denominator given) for its end forces `f`, and its end accelerations.
 #[inline(always)]
-fn respond(
+fn response(
     inertia: &crate::model::inertia::BarInertia,
     (bv, minus_bdot2, inv_den): (Vector3<f64>, f64, f64),
-    ws: &mut Workspace,
-    i: usize,
-) {
-    let (a, b) = (2 * i, 2 * i + 1);
-    let (fa, fb) = (ws.end_force[a], ws.end_force[b]);
+    [fa, fb]: &[Vector3<f64>; 2],
+) -> (f64, [Vector3<f64>; 2]) {
     let lambda = (minus_bdot2 - bv.dot(&(fa * inertia.alpha + fb * inertia.beta))) * inv_den;
-    ws.lambda[i] = lambda;
     let (ga, gb) = (fa - bv * lambda, fb + bv * lambda);
     let w = &inertia.w;
-    ws.end_acc[a] = ga * w[0][0] + gb * w[0][1];
-    ws.end_acc[b] = ga * w[1][0] + gb * w[1][1];
+    (
+        lambda,
+        [ga * w[0][0] + gb * w[0][1], ga * w[1][0] + gb * w[1][1]],
+    )
+}
+
+/// A bar's two ends at a time.
+#[inline(always)]
+fn pairs(ends: &[Vector3<f64>]) -> &[[Vector3<f64>; 2]] {
+    ends.as_chunks::<2>().0
+}
+
+#[inline(always)]
+fn pairs_mut(ends: &mut [Vector3<f64>]) -> &mut [[Vector3<f64>; 2]] {
+    ends.as_chunks_mut::<2>().0
 }
 
 /// Stage 4: reactions Ω from `N̈ P = 0` (K assembled by [`bar_response`]), added to the end

@@ -10,6 +10,8 @@
 
 use nalgebra::{DVector, Matrix3, Vector3};
 
+use super::block_lanes::LaneGroups;
+
 /// Pivots below this fraction of the largest diagonal entry mean a singular matrix.
 const SINGULAR: f64 = 1e-12;
 
@@ -22,29 +24,84 @@ pub struct BlockLdl {
     /// blocks: `L_ik D_k` below the diagonal, for the updates of later columns, and `D_k` on
     /// it. One array, so an evaluation streams K once (it matters for large structures).
     pub k_values: Vec<Matrix3<f64>>,
-    /// Strictly lower blocks `L_ik` by column (with fill); each column's first slot, the
-    /// identity, is unused.
-    l_start: Vec<usize>,
-    l_rows: Vec<usize>,
+    pattern: Pattern,
     l_values: Vec<Matrix3<f64>>,
-    /// The updates `S[target] −= L[source] (LD[with])ᵀ` of each column, `update_start[k]..`.
-    update_start: Vec<usize>,
-    updates: Vec<Update>,
     /// `D_k⁻¹`, symmetric.
     d_inv: Vec<Matrix3<f64>>,
+    /// Identical independent chains factored side by side, when K is made of them.
+    lanes: Option<Box<LaneGroups>>,
+}
+
+/// The symbolic factor: where L's blocks are and which updates make each column.
+#[derive(Debug, Clone)]
+pub(super) struct Pattern {
+    /// Strictly lower blocks `L_ik` by column (with fill); each column's first slot, the
+    /// identity, is unused.
+    pub l_start: Vec<usize>,
+    pub l_rows: Vec<usize>,
+    /// The updates `S[target] −= L[source] (LD[with])ᵀ` of each column, `update_start[k]..`.
+    pub update_start: Vec<usize>,
+    pub updates: Vec<Update>,
 }
 
 /// One block update of the factorization, as slots in L's layout.
-#[derive(Debug, Clone, Copy)]
-struct Update {
-    target: usize,
-    source: usize,
-    with: usize,
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(super) struct Update {
+    pub target: usize,
+    pub source: usize,
+    pub with: usize,
 }
 
 impl BlockLdl {
     /// Analyses the pattern of `n` block columns with the given lower blocks `(row, col)`,
     /// `row ≥ col`; every diagonal block is added.
+    pub fn new(n: usize, lower_blocks: &[(usize, usize)]) -> Self {
+        let pattern = Pattern::new(n, lower_blocks);
+        let slots = pattern.l_rows.len();
+        let mut chol = Self {
+            n,
+            k_values: vec![Matrix3::zeros(); slots],
+            l_values: vec![Matrix3::zeros(); slots],
+            d_inv: vec![Matrix3::zeros(); n],
+            pattern,
+            lanes: None,
+        };
+        chol.lanes = LaneGroups::find(&chol, lower_blocks).map(Box::new);
+        chol
+    }
+
+    /// The same without side-by-side chains (the reference the lanes are tested against).
+    #[cfg(test)]
+    pub fn without_lanes(mut self) -> Self {
+        self.lanes = None;
+        self
+    }
+
+    /// Number of block columns.
+    pub fn size(&self) -> usize {
+        self.n
+    }
+
+    /// Factors and solves with the side-by-side chains' portable (SSE2) code.
+    #[cfg(test)]
+    pub fn factor_and_solve_portable(&mut self, b: &mut DVector<f64>) -> bool {
+        let scale = (0..self.n)
+            .map(|k| self.k_values[self.pattern.l_start[k]].diagonal().amax())
+            .fold(0.0, f64::max);
+        let lanes = self.lanes.as_mut().expect("side by side");
+        let (b, _) = b.as_mut_slice().as_chunks_mut::<3>();
+        lanes.factor_and_solve_portable(&self.k_values, SINGULAR * scale, b)
+    }
+
+    /// Whether identical chains are factored side by side.
+    #[cfg(test)]
+    pub fn has_lanes(&self) -> bool {
+        self.lanes.is_some()
+    }
+}
+
+impl Pattern {
+    /// The symbolic factorisation of `n` block columns with lower blocks `lower_blocks`.
     pub fn new(n: usize, lower_blocks: &[(usize, usize)]) -> Self {
         let mut k_cols: Vec<Vec<usize>> = (0..n).map(|c| vec![c]).collect();
         for &(r, c) in lower_blocks {
@@ -57,7 +114,7 @@ impl BlockLdl {
             col[1..].sort_unstable();
             col.dedup();
         }
-        // Symbolic factorisation: the pattern of column k of L is K's plus its children's.
+        // The pattern of column k of L is K's plus its children's.
         let mut l_cols: Vec<Vec<usize>> = Vec::with_capacity(n);
         let mut children: Vec<Vec<usize>> = vec![Vec::new(); n];
         for k in 0..n {
@@ -102,35 +159,42 @@ impl BlockLdl {
             update_start.push(updates.len());
         }
         Self {
-            n,
-            k_values: vec![Matrix3::zeros(); l_rows.len()],
-            l_values: vec![Matrix3::zeros(); l_rows.len()],
             l_start,
             l_rows,
             update_start,
             updates,
-            d_inv: vec![Matrix3::zeros(); n],
         }
     }
 
-    /// Index into `k_values` of the lower block `(row, col)`, `row ≥ col`.
-    pub fn k_index(&self, row: usize, col: usize) -> Option<usize> {
+    /// Slot of the lower block `(row, col)`, if it is in the pattern.
+    pub fn slot(&self, row: usize, col: usize) -> Option<usize> {
         let start = self.l_start[col];
         let rows = &self.l_rows[start..self.l_start[col + 1]];
         rows.binary_search(&row).ok().map(|p| start + p)
+    }
+}
+
+impl BlockLdl {
+    /// Index into `k_values` of the lower block `(row, col)`, `row ≥ col`.
+    pub fn k_index(&self, row: usize, col: usize) -> Option<usize> {
+        self.pattern.slot(row, col)
     }
 
     /// Factors the current `k_values` (overwriting them); false if K is not (numerically)
     /// positive definite, which includes any NaN in it (a NaN reaches a pivot, and fails
     /// its test).
     pub fn factor(&mut self) -> bool {
+        let pattern = &self.pattern;
         let scale = (0..self.n)
-            .map(|k| self.k_values[self.l_start[k]].diagonal().amax())
+            .map(|k| self.k_values[pattern.l_start[k]].diagonal().amax())
             .fold(0.0, f64::max);
         let tiny = SINGULAR * scale;
+        if let Some(lanes) = &mut self.lanes {
+            return lanes.factor(&self.k_values, tiny);
+        }
         for k in 0..self.n {
-            let diagonal = self.l_start[k];
-            for u in &self.updates[self.update_start[k]..self.update_start[k + 1]] {
+            let diagonal = pattern.l_start[k];
+            for u in &pattern.updates[pattern.update_start[k]..pattern.update_start[k + 1]] {
                 let (l, ld) = (&self.l_values[u.source], self.k_values[u.with]);
                 if u.target == diagonal {
                     // Only the lower triangle of a pivot block is read.
@@ -143,7 +207,7 @@ impl BlockLdl {
                 return false;
             };
             self.d_inv[k] = d_inv;
-            for p in diagonal + 1..self.l_start[k + 1] {
+            for p in diagonal + 1..pattern.l_start[k + 1] {
                 self.l_values[p] = mul_symmetric(&self.k_values[p], &d_inv);
             }
         }
@@ -151,21 +215,25 @@ impl BlockLdl {
     }
 
     /// Solves `K x = b` in place with the last successful factor.
-    pub fn solve(&self, b: &mut DVector<f64>) {
+    pub fn solve(&mut self, b: &mut DVector<f64>) {
         let (b, _) = b.as_mut_slice().as_chunks_mut::<3>();
         let b = &mut b[..self.n];
+        if let Some(lanes) = &mut self.lanes {
+            return lanes.solve(b);
+        }
+        let pattern = &self.pattern;
         for k in 0..self.n {
             let y = Vector3::from(b[k]);
-            for p in self.l_start[k] + 1..self.l_start[k + 1] {
-                let i = self.l_rows[p];
+            for p in pattern.l_start[k] + 1..pattern.l_start[k + 1] {
+                let i = pattern.l_rows[p];
                 let bi = Vector3::from(b[i]) - self.l_values[p] * y;
                 b[i] = bi.into();
             }
         }
         for k in (0..self.n).rev() {
             let mut x = self.d_inv[k] * Vector3::from(b[k]);
-            for p in self.l_start[k] + 1..self.l_start[k + 1] {
-                x -= self.l_values[p].tr_mul(&Vector3::from(b[self.l_rows[p]]));
+            for p in pattern.l_start[k] + 1..pattern.l_start[k + 1] {
+                x -= self.l_values[p].tr_mul(&Vector3::from(b[pattern.l_rows[p]]));
             }
             b[k] = x.into();
         }
@@ -176,8 +244,8 @@ impl BlockLdl {
     pub fn dense(&self) -> nalgebra::DMatrix<f64> {
         let mut m = nalgebra::DMatrix::zeros(3 * self.n, 3 * self.n);
         for c in 0..self.n {
-            for p in self.l_start[c]..self.l_start[c + 1] {
-                let r = self.l_rows[p];
+            for p in self.pattern.l_start[c]..self.pattern.l_start[c + 1] {
+                let r = self.pattern.l_rows[p];
                 let block = self.k_values[p];
                 m.fixed_view_mut::<3, 3>(3 * r, 3 * c).copy_from(&block);
                 if r != c {
@@ -266,10 +334,33 @@ mod tests {
     use super::*;
     use nalgebra::DMatrix;
 
+    /// K with random blocks on `pattern` and random SPD diagonal blocks, and a random
+    /// right-hand side.
+    fn random_spd(n: usize, pattern: &[(usize, usize)], seed: u64) -> (BlockLdl, DVector<f64>) {
+        let mut seed = seed;
+        let mut rand = move || {
+            seed = seed
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (seed >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+        };
+        let mut chol = BlockLdl::new(n, pattern);
+        for &(r, c) in pattern {
+            let idx = chol.k_index(r, c).unwrap();
+            chol.k_values[idx] = Matrix3::from_fn(|_, _| rand());
+        }
+        for k in 0..n {
+            let a = Matrix3::from_fn(|_, _| rand());
+            let idx = chol.k_index(k, k).unwrap();
+            chol.k_values[idx] = a * a.transpose() + Matrix3::identity() * 8.0;
+        }
+        let b = DVector::from_fn(3 * n, |_, _| rand());
+        (chol, b)
+    }
+
     /// A random SPD block matrix with a given block pattern agrees with a dense solve.
     #[test]
     fn solves_like_dense_cholesky() {
-        let n = 7;
         let pattern = [
             (1, 0),
             (3, 0),
@@ -280,26 +371,9 @@ mod tests {
             (6, 5),
             (6, 0),
         ];
-        let mut seed = 12345u64;
-        let mut rand = || {
-            seed = seed
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            (seed >> 11) as f64 / (1u64 << 53) as f64 - 0.5
-        };
-        let mut chol = BlockLdl::new(n, &pattern);
-        for &(r, c) in pattern.iter() {
-            let idx = chol.k_index(r, c).unwrap();
-            chol.k_values[idx] = Matrix3::from_fn(|_, _| rand());
-        }
-        for k in 0..n {
-            let a = Matrix3::from_fn(|_, _| rand());
-            let idx = chol.k_index(k, k).unwrap();
-            chol.k_values[idx] = a * a.transpose() + Matrix3::identity() * 8.0;
-        }
+        let (mut chol, b) = random_spd(7, &pattern, 12345);
         let dense: DMatrix<f64> = chol.dense();
         assert!(chol.factor());
-        let b = DVector::from_fn(3 * n, |i, _| (i as f64).sin());
         let mut x = b.clone();
         chol.solve(&mut x);
         let expected = dense.cholesky().unwrap().solve(&b);
@@ -316,5 +390,69 @@ mod tests {
             chol.k_values[idx] = m;
         }
         assert!(!chol.factor());
+    }
+
+    /// Three uncoupled chains with the same pattern, interleaved as the tower's are (column
+    /// c in chain c mod 3), each with fill, random SPD values per chain.
+    fn three_chains(seed: u64) -> (BlockLdl, DVector<f64>) {
+        let links = 7;
+        let n = 3 * links;
+        let mut pattern = Vec::new();
+        for chain in 0..3 {
+            for k in 0..links - 1 {
+                pattern.push((3 * (k + 1) + chain, 3 * k + chain));
+            }
+            pattern.push((3 * (links - 1) + chain, chain));
+        }
+        random_spd(n, &pattern, seed)
+    }
+
+    /// Side by side, the chains factor and solve to the scalar factor's bits, and agree
+    /// with a dense solve.
+    #[test]
+    fn chains_side_by_side_give_the_scalar_bits() {
+        for seed in [1, 2, 3] {
+            let (mut lanes, b) = three_chains(seed);
+            assert!(lanes.has_lanes(), "identical chains go side by side");
+            let mut scalar = lanes.clone().without_lanes();
+            let dense = lanes.dense();
+            assert!(lanes.factor() && scalar.factor());
+            let (mut x, mut y) = (b.clone(), b.clone());
+            lanes.solve(&mut x);
+            scalar.solve(&mut y);
+            for (p, q) in x.iter().zip(y.iter()) {
+                assert_eq!(p.to_bits(), q.to_bits());
+            }
+            let mut portable = three_chains(seed).0;
+            let mut z = b.clone();
+            assert!(portable.factor_and_solve_portable(&mut z));
+            assert!(x
+                .iter()
+                .zip(z.iter())
+                .all(|(p, q)| p.to_bits() == q.to_bits()));
+            let expected = dense.cholesky().unwrap().solve(&b);
+            assert!((x - expected).amax() < 1e-12);
+        }
+    }
+
+    /// A singular pivot in one chain fails the factor side by side too.
+    #[test]
+    fn a_singular_chain_fails_side_by_side() {
+        let (mut chol, _) = three_chains(4);
+        let idx = chol.k_index(4, 4).unwrap();
+        chol.k_values[idx] = Matrix3::zeros();
+        assert!(chol.has_lanes());
+        let mut scalar = chol.clone().without_lanes();
+        assert!(!chol.factor());
+        assert!(!scalar.factor());
+    }
+
+    /// Chains of different patterns stay on the scalar factor.
+    #[test]
+    fn unlike_chains_are_not_put_side_by_side() {
+        let chol = BlockLdl::new(5, &[(1, 0), (2, 1), (4, 3)]);
+        assert!(!chol.has_lanes());
+        let twins = BlockLdl::new(6, &[(2, 0), (4, 2), (3, 1), (5, 3)]);
+        assert!(twins.has_lanes());
     }
 }

@@ -2,6 +2,7 @@
 //! the constraint basis, the correction plan and the reaction-system layout.
 
 mod block_cholesky;
+mod block_lanes;
 pub mod contact;
 pub mod coords;
 pub mod correction_plan;

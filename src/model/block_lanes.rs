@@ -1,0 +1,369 @@
+//! Identical, uncoupled chains of the reaction matrix factored side by side.
+//!
+//! A structure with an n-fold symmetry (the paper's tower: three chains of joints, one per
+//! strut of a stage) has a reaction matrix made of identical parts with no block between
+//! them. Here each entry of up to [`LANES`] such parts is one `[f64; LANES]`, so every
+//! operation of the factorization and the solves works on all of them at once, in SIMD
+//! registers: AVX2 when the processor has it, two SSE2 halves otherwise. Lane by lane the
+//! arithmetic is the scalar factor's, operation for operation and without fused
+//! multiply-adds, so the results are the same bits on any x86-64.
+
+use nalgebra::Matrix3;
+
+use super::block_cholesky::{BlockLdl, Pattern};
+
+/// Parts per group.
+const LANES: usize = 4;
+type Lanes = [f64; LANES];
+/// One 3 × 3 block per lane, entry (i, j) at `3 j + i` (nalgebra's order).
+type Block = [Lanes; 9];
+
+/// K's parts in groups of identical ones.
+#[derive(Debug, Clone)]
+pub struct LaneGroups {
+    groups: Vec<LaneGroup>,
+}
+
+/// Up to [`LANES`] identical parts; lane `l` is part `l`, unused lanes hold the identity.
+#[derive(Debug, Clone)]
+struct LaneGroup {
+    /// The parts' common pattern, in a part's own column numbering.
+    pattern: Pattern,
+    /// Per local column, the original column of each used lane.
+    columns: Vec<[usize; LANES]>,
+    /// Per local slot, the slot in `BlockLdl::k_values` of each used lane.
+    slots: Vec<[usize; LANES]>,
+    used: usize,
+    k: Vec<Block>,
+    l: Vec<Block>,
+    d_inv: Vec<Block>,
+    rhs: Vec<[Lanes; 3]>,
+}
+
+impl LaneGroups {
+    /// Groups `chol`'s connected components by their pattern, if K is made of at least two
+    /// components and each has at least one twin (else the scalar factor is as good).
+    pub fn find(chol: &BlockLdl, lower_blocks: &[(usize, usize)]) -> Option<Self> {
+        let components = components(chol.size(), lower_blocks);
+        if components.len() < 2 {
+            return None;
+        }
+        let mut local = vec![0; chol.size()];
+        let mut component_of = vec![0; chol.size()];
+        for (i, columns) in components.iter().enumerate() {
+            for (k, &c) in columns.iter().enumerate() {
+                local[c] = k;
+                component_of[c] = i;
+            }
+        }
+        let mut shapes: Vec<Vec<(usize, usize)>> = vec![Vec::new(); components.len()];
+        for &(r, c) in lower_blocks {
+            shapes[component_of[c]].push((local[r], local[c]));
+        }
+        for shape in &mut shapes {
+            shape.sort_unstable();
+            shape.dedup();
+        }
+        // Components of one shape (same size, same blocks), in order of their first column.
+        let mut classes: Vec<Vec<usize>> = Vec::new();
+        for i in 0..components.len() {
+            let twin = |class: &&mut Vec<usize>| {
+                let j = class[0];
+                components[j].len() == components[i].len() && shapes[j] == shapes[i]
+            };
+            match classes.iter_mut().find(twin) {
+                Some(class) => class.push(i),
+                None => classes.push(vec![i]),
+            }
+        }
+        if classes.iter().any(|class| class.len() < 2) {
+            return None;
+        }
+        let mut groups = Vec::new();
+        for class in &classes {
+            for members in class.chunks(LANES) {
+                let parts: Vec<&[usize]> = members.iter().map(|&i| &components[i][..]).collect();
+                groups.push(LaneGroup::new(chol, &parts, &shapes[members[0]])?);
+            }
+        }
+        Some(Self { groups })
+    }
+
+    /// Factors K as assembled in `k_values`; false if a pivot of any part fails.
+    pub fn factor(&mut self, k_values: &[Matrix3<f64>], tiny: f64) -> bool {
+        #[cfg(target_arch = "x86_64")]
+        if std::arch::is_x86_feature_detected!("avx2") {
+            // SAFETY: the processor has AVX2.
+            return unsafe { self.factor_avx2(k_values, tiny) };
+        }
+        self.factor_lanes(k_values, tiny)
+    }
+
+    /// Solves `K x = b` in place (`b` by original column) with the last factor.
+    pub fn solve(&mut self, b: &mut [[f64; 3]]) {
+        #[cfg(target_arch = "x86_64")]
+        if std::arch::is_x86_feature_detected!("avx2") {
+            // SAFETY: the processor has AVX2.
+            return unsafe { self.solve_avx2(b) };
+        }
+        self.solve_lanes(b)
+    }
+
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    unsafe fn factor_avx2(&mut self, k_values: &[Matrix3<f64>], tiny: f64) -> bool {
+        self.factor_lanes(k_values, tiny)
+    }
+
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    unsafe fn solve_avx2(&mut self, b: &mut [[f64; 3]]) {
+        self.solve_lanes(b)
+    }
+
+    /// [`Self::factor`] and [`Self::solve`] compiled for baseline x86-64 only (SSE2), as on
+    /// a processor without AVX2.
+    #[cfg(test)]
+    pub fn factor_and_solve_portable(
+        &mut self,
+        k: &[Matrix3<f64>],
+        tiny: f64,
+        b: &mut [[f64; 3]],
+    ) -> bool {
+        let ok = self.factor_lanes(k, tiny);
+        self.solve_lanes(b);
+        ok
+    }
+
+    #[inline(always)]
+    fn factor_lanes(&mut self, k_values: &[Matrix3<f64>], tiny: f64) -> bool {
+        // A plain loop: a closure-taking adapter would be compiled outside the AVX2 caller.
+        for group in &mut self.groups {
+            if !group.factor(k_values, tiny) {
+                return false;
+            }
+        }
+        true
+    }
+
+    #[inline(always)]
+    fn solve_lanes(&mut self, b: &mut [[f64; 3]]) {
+        for group in &mut self.groups {
+            group.solve(b);
+        }
+    }
+}
+
+impl LaneGroup {
+    /// A group of `parts` (each its original columns, in order) of the common `shape`.
+    fn new(chol: &BlockLdl, parts: &[&[usize]], shape: &[(usize, usize)]) -> Option<Self> {
+        let m = parts[0].len();
+        let pattern = Pattern::new(m, shape);
+        let slots_n = pattern.l_rows.len();
+        let mut columns = vec![[0; LANES]; m];
+        let mut slots = vec![[0; LANES]; slots_n];
+        for (lane, part) in parts.iter().enumerate() {
+            for c in 0..m {
+                columns[c][lane] = part[c];
+                for p in pattern.l_start[c]..pattern.l_start[c + 1] {
+                    // Fill is the same as in K's own factor: a part keeps its columns' order.
+                    slots[p][lane] = chol.k_index(part[pattern.l_rows[p]], part[c])?;
+                }
+            }
+        }
+        // Unused lanes: identity pivots, zero elsewhere, which the factor leaves as they are.
+        let mut k = vec![[[0.0; LANES]; 9]; slots_n];
+        for c in 0..m {
+            for e in [0, 4, 8] {
+                k[pattern.l_start[c]][e][parts.len()..].fill(1.0);
+            }
+        }
+        Some(Self {
+            columns,
+            slots,
+            used: parts.len(),
+            l: vec![[[0.0; LANES]; 9]; slots_n],
+            d_inv: vec![[[0.0; LANES]; 9]; m],
+            rhs: vec![[[0.0; LANES]; 3]; m],
+            k,
+            pattern,
+        })
+    }
+
+    #[inline(always)]
+    fn factor(&mut self, k_values: &[Matrix3<f64>], tiny: f64) -> bool {
+        for (block, slots) in self.k.iter_mut().zip(&self.slots) {
+            for (lane, &slot) in slots.iter().enumerate().take(self.used) {
+                for (e, &x) in k_values[slot].as_slice().iter().enumerate() {
+                    block[e][lane] = x;
+                }
+            }
+        }
+        let pattern = &self.pattern;
+        for c in 0..self.columns.len() {
+            let diagonal = pattern.l_start[c];
+            for u in &pattern.updates[pattern.update_start[c]..pattern.update_start[c + 1]] {
+                // `with` is in an earlier column than `target`, so in an earlier slot.
+                let (earlier, from_target) = self.k.split_at_mut(u.target);
+                let lower = u.target == diagonal;
+                subtract_abt(
+                    &mut from_target[0],
+                    &self.l[u.source],
+                    &earlier[u.with],
+                    lower,
+                );
+            }
+            let d_inv = &mut self.d_inv[c];
+            if !inverse3(&self.k[diagonal], tiny, d_inv) {
+                return false;
+            }
+            for p in diagonal + 1..pattern.l_start[c + 1] {
+                mul_symmetric(&self.k[p], d_inv, &mut self.l[p]);
+            }
+        }
+        true
+    }
+
+    #[inline(always)]
+    fn solve(&mut self, b: &mut [[f64; 3]]) {
+        for (x, columns) in self.rhs.iter_mut().zip(&self.columns) {
+            for (lane, &c) in columns.iter().enumerate().take(self.used) {
+                for i in 0..3 {
+                    x[i][lane] = b[c][i];
+                }
+            }
+        }
+        let (pattern, rhs) = (&self.pattern, &mut self.rhs);
+        for k in 0..rhs.len() {
+            let y = rhs[k];
+            for p in pattern.l_start[k] + 1..pattern.l_start[k + 1] {
+                let ly = mul_vector(&self.l[p], &y);
+                let bi = &mut rhs[pattern.l_rows[p]];
+                for i in 0..3 {
+                    bi[i] = lanes(|l| bi[i][l] - ly[i][l]);
+                }
+            }
+        }
+        for k in (0..rhs.len()).rev() {
+            let mut x = mul_vector(&self.d_inv[k], &rhs[k]);
+            for p in pattern.l_start[k] + 1..pattern.l_start[k + 1] {
+                let t = tr_mul_vector(&self.l[p], &rhs[pattern.l_rows[p]]);
+                for j in 0..3 {
+                    x[j] = lanes(|l| x[j][l] - t[j][l]);
+                }
+            }
+            rhs[k] = x;
+        }
+        for (x, columns) in self.rhs.iter().zip(&self.columns) {
+            for (lane, &c) in columns.iter().enumerate().take(self.used) {
+                for i in 0..3 {
+                    b[c][i] = x[i][lane];
+                }
+            }
+        }
+    }
+}
+
+/// A lane-wise value.
+#[inline(always)]
+fn lanes(f: impl Fn(usize) -> f64) -> Lanes {
+    std::array::from_fn(f)
+}
+
+/// `s −= a bᵀ` (only the lower triangle for a pivot), each entry as the scalar kernel sums it.
+#[inline(always)]
+fn subtract_abt(s: &mut Block, a: &Block, b: &Block, lower: bool) {
+    for j in 0..3 {
+        for i in if lower { j } else { 0 }..3 {
+            let (a0, a1, a2) = (&a[i], &a[3 + i], &a[6 + i]);
+            let (b0, b1, b2) = (&b[j], &b[3 + j], &b[6 + j]);
+            let s = &mut s[3 * j + i];
+            *s = lanes(|l| s[l] - (a0[l] * b0[l] + a1[l] * b1[l] + a2[l] * b2[l]));
+        }
+    }
+}
+
+/// `out = a d` for a symmetric `d`.
+#[inline(always)]
+fn mul_symmetric(a: &Block, d: &Block, out: &mut Block) {
+    for j in 0..3 {
+        for i in 0..3 {
+            let (a0, a1, a2) = (&a[i], &a[3 + i], &a[6 + i]);
+            let (d0, d1, d2) = (&d[3 * j], &d[3 * j + 1], &d[3 * j + 2]);
+            out[3 * j + i] = lanes(|l| a0[l] * d0[l] + a1[l] * d1[l] + a2[l] * d2[l]);
+        }
+    }
+}
+
+/// `a x`, summed column by column as nalgebra's matrix–vector product does.
+#[inline(always)]
+fn mul_vector(a: &Block, x: &[Lanes; 3]) -> [Lanes; 3] {
+    std::array::from_fn(|i| {
+        lanes(|l| a[i][l] * x[0][l] + a[3 + i][l] * x[1][l] + a[6 + i][l] * x[2][l])
+    })
+}
+
+/// `aᵀ x`, each entry a dot product as nalgebra's `tr_mul` sums it.
+#[inline(always)]
+fn tr_mul_vector(a: &Block, x: &[Lanes; 3]) -> [Lanes; 3] {
+    std::array::from_fn(|j| {
+        lanes(|l| a[3 * j][l] * x[0][l] + a[3 * j + 1][l] * x[1][l] + a[3 * j + 2][l] * x[2][l])
+    })
+}
+
+/// The scalar `inverse3` lane by lane, into `inv`; false if a pivot of any lane fails its
+/// test.
+#[inline(always)]
+fn inverse3(a: &Block, tiny: f64, inv: &mut Block) -> bool {
+    let (a00, a10, a20, a11, a21, a22) = (a[0], a[1], a[2], a[4], a[5], a[8]);
+    let c00 = lanes(|l| a11[l] * a22[l] - a21[l] * a21[l]);
+    let c10 = lanes(|l| a20[l] * a21[l] - a10[l] * a22[l]);
+    let c20 = lanes(|l| a10[l] * a21[l] - a11[l] * a20[l]);
+    let m2 = lanes(|l| a00[l] * a11[l] - a10[l] * a10[l]);
+    let det = lanes(|l| a00[l] * c00[l] + a10[l] * c10[l] + a20[l] * c20[l]);
+    let pivots_pass = (0..LANES)
+        .map(|l| a00[l] > tiny && m2[l] > tiny * a00[l] && det[l] > tiny * m2[l])
+        .fold(true, |all, ok| all & ok);
+    if !pivots_pass {
+        return false;
+    }
+    let r = lanes(|l| 1.0 / det[l]);
+    let c11 = lanes(|l| a00[l] * a22[l] - a20[l] * a20[l]);
+    let c21 = lanes(|l| a10[l] * a20[l] - a00[l] * a21[l]);
+    let scaled = |c: Lanes| lanes(|l| c[l] * r[l]);
+    *inv = [
+        scaled(c00),
+        scaled(c10),
+        scaled(c20),
+        scaled(c10),
+        scaled(c11),
+        scaled(c21),
+        scaled(c20),
+        scaled(c21),
+        scaled(m2),
+    ];
+    true
+}
+
+/// The connected components of the block pattern, each its columns in order, ordered by
+/// their first column.
+fn components(n: usize, lower_blocks: &[(usize, usize)]) -> Vec<Vec<usize>> {
+    fn find(root: &mut [usize], mut c: usize) -> usize {
+        while root[c] != c {
+            root[c] = root[root[c]];
+            c = root[c];
+        }
+        c
+    }
+    let mut root: Vec<usize> = (0..n).collect();
+    for &(r, c) in lower_blocks {
+        let (a, b) = (find(&mut root, r), find(&mut root, c));
+        root[a.max(b)] = a.min(b);
+    }
+    let mut members: Vec<Vec<usize>> = vec![Vec::new(); n];
+    for c in 0..n {
+        let r = find(&mut root, c);
+        members[r].push(c);
+    }
+    members.into_iter().filter(|m| !m.is_empty()).collect()
+}
