@@ -15,12 +15,12 @@ pub fn applied_forces(model: &Model, inputs: &Inputs, t: f64, ws: &mut Workspace
         match effect {
             ForceEffect::ElasticCables(cables) => {
                 for (link, stiffness, rest) in cables {
-                    apply_cable(link, ws, |s, _| taut_density(*stiffness, *rest, s.norm()));
+                    apply_cable(link, ws, |s| taut_density(*stiffness, *rest, s.norm()));
                 }
             }
             ForceEffect::DampedCables(cables) => {
                 for (link, stiffness, rest, c) in cables {
-                    apply_cable(link, ws, |s, s_dot| {
+                    apply_damped_cable(link, ws, |s, s_dot| {
                         damped_density(*stiffness, *rest, *c, s, s_dot)
                     });
                 }
@@ -28,13 +28,13 @@ pub fn applied_forces(model: &Model, inputs: &Inputs, t: f64, ws: &mut Workspace
             ForceEffect::ForceDensityCables(cables) => {
                 for (link, input) in cables {
                     let gamma = inputs.force_density[*input].max(0.0);
-                    apply_cable(link, ws, |_, _| gamma);
+                    apply_cable(link, ws, |_| gamma);
                 }
             }
             ForceEffect::ReeledCables(cables) => {
                 for (link, stiffness, c, input) in cables {
                     let rest = inputs.rest_length[*input].max(0.0);
-                    apply_cable(link, ws, |s, s_dot| {
+                    apply_damped_cable(link, ws, |s, s_dot| {
                         damped_density(*stiffness, rest, *c, s, s_dot)
                     });
                 }
@@ -72,9 +72,17 @@ fn add(ws: &mut Workspace, end: Target, f: Vector3<f64>) {
     }
 }
 
-/// Applies `γ s` to a cable's ends, with `γ` from its law, and records `γ`.
+/// Applies `γ s` to a cable's ends, with `γ` from its law of `s`, and records `γ`.
 #[inline]
-fn apply_cable(
+fn apply_cable(link: &CableLink, ws: &mut Workspace, law: impl Fn(&Vector3<f64>) -> f64) {
+    let [a, b] = link.nodes;
+    let s = ws.node_pos[b] - ws.node_pos[a];
+    pull(link, ws, s, law(&s));
+}
+
+/// [`apply_cable`] for a law of `s` and `ṡ` (only these read the node velocities).
+#[inline]
+fn apply_damped_cable(
     link: &CableLink,
     ws: &mut Workspace,
     law: impl Fn(&Vector3<f64>, &Vector3<f64>) -> f64,
@@ -82,7 +90,11 @@ fn apply_cable(
     let [a, b] = link.nodes;
     let s = ws.node_pos[b] - ws.node_pos[a];
     let s_dot = ws.node_vel[b] - ws.node_vel[a];
-    let gamma = law(&s, &s_dot);
+    pull(link, ws, s, law(&s, &s_dot));
+}
+
+#[inline(always)]
+fn pull(link: &CableLink, ws: &mut Workspace, s: Vector3<f64>, gamma: f64) {
     ws.gamma[link.cable] = gamma;
     add(ws, link.ends[0], s * gamma);
     add(ws, link.ends[1], -s * gamma);

@@ -86,7 +86,7 @@ impl BlockLdl {
     #[cfg(test)]
     pub fn factor_and_solve_portable(&mut self, b: &mut DVector<f64>) -> bool {
         let scale = (0..self.n)
-            .map(|k| self.k_values[self.pattern.l_start[k]].diagonal().amax())
+            .map(|k| diagonal_amax(&self.k_values[self.pattern.l_start[k]]))
             .fold(0.0, f64::max);
         let lanes = self.lanes.as_mut().expect("side by side");
         let (b, _) = b.as_mut_slice().as_chunks_mut::<3>();
@@ -185,8 +185,9 @@ impl BlockLdl {
     /// its test).
     pub fn factor(&mut self) -> bool {
         let pattern = &self.pattern;
-        let scale = (0..self.n)
-            .map(|k| self.k_values[pattern.l_start[k]].diagonal().amax())
+        let scale = pattern.l_start[..self.n]
+            .iter()
+            .map(|&d| diagonal_amax(&self.k_values[d]))
             .fold(0.0, f64::max);
         let tiny = SINGULAR * scale;
         if let Some(lanes) = &mut self.lanes {
@@ -256,6 +257,12 @@ impl BlockLdl {
         }
         m
     }
+}
+
+/// The largest magnitude on a block's diagonal (a NaN there fails its pivot anyway).
+#[inline(always)]
+fn diagonal_amax(a: &Matrix3<f64>) -> f64 {
+    a[(0, 0)].abs().max(a[(1, 1)].abs()).max(a[(2, 2)].abs())
 }
 
 /// `s −= a bᵀ`, written out so that each entry is three products and a sum.

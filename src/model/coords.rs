@@ -258,19 +258,29 @@ impl Coordinates {
     }
 
     /// Column `e` of `N = N₀ + η₂ U₂ᵀ` (with `offset` false: of `Ṅ = η̇₂ U₂ᵀ`).
-    #[inline]
+    #[inline(always)]
     pub fn end_vector(&self, e: End, eta: &[f64], offset: bool) -> Vector3<f64> {
+        let Some(single) = &self.single else {
+            return self.end_vector_csr(e, eta, offset);
+        };
         let mut x = if offset {
             self.fixed[e]
         } else {
             Vector3::zeros()
         };
-        if let Some(single) = &self.single {
-            if let Some((g, c)) = single[e] {
-                x += Vector3::from(eta.as_chunks::<3>().0[g]) * c;
-            }
-            return x;
+        if let Some((g, c)) = single[e] {
+            x += Vector3::from(eta.as_chunks::<3>().0[g]) * c;
         }
+        x
+    }
+
+    /// [`Self::end_vector`] through the general rows (the dense basis).
+    fn end_vector_csr(&self, e: End, eta: &[f64], offset: bool) -> Vector3<f64> {
+        let mut x = if offset {
+            self.fixed[e]
+        } else {
+            Vector3::zeros()
+        };
         for &(g, c) in self.row(e) {
             x += Vector3::new(eta[3 * g], eta[3 * g + 1], eta[3 * g + 2]) * c;
         }

@@ -163,9 +163,9 @@ impl Reactions {
     /// Sets the right-hand side to `−N̈ P` for the end accelerations without reactions.
     pub fn set_rhs(&mut self, end_acc: &[Vector3<f64>]) {
         let (rhs, _) = self.rhs.as_mut_slice().as_chunks_mut::<3>();
-        for (c, r) in rhs.iter_mut().enumerate() {
+        for (r, span) in rhs.iter_mut().zip(self.term_start.windows(2)) {
             let mut sum = Vector3::zeros();
-            for &(e, coef) in &self.terms[self.term_start[c]..self.term_start[c + 1]] {
+            for &(e, coef) in &self.terms[span[0]..span[1]] {
                 sum += end_acc[e] * coef;
             }
             *r = [-sum.x, -sum.y, -sum.z];
@@ -175,9 +175,9 @@ impl Reactions {
     /// Adds the solved reactions `Ω P` to the end forces.
     pub fn add_to(&self, end_force: &mut [Vector3<f64>]) {
         let (omega, _) = self.rhs.as_slice().as_chunks::<3>();
-        for (c, o) in omega.iter().enumerate() {
+        for (o, span) in omega.iter().zip(self.term_start.windows(2)) {
             let o = Vector3::from(*o);
-            for &(e, coef) in &self.terms[self.term_start[c]..self.term_start[c + 1]] {
+            for &(e, coef) in &self.terms[span[0]..span[1]] {
                 end_force[e] += o * coef;
             }
         }
