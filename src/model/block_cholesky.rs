@@ -67,6 +67,11 @@ impl BlockLdl {
             lanes: None,
         };
         chol.lanes = LaneGroups::find(&chol, lower_blocks).map(Box::new);
+        if chol.lanes.is_some() {
+            // The lanes keep their own factor.
+            chol.l_values = Vec::new();
+            chol.d_inv = Vec::new();
+        }
         chol
     }
 
@@ -74,6 +79,8 @@ impl BlockLdl {
     #[cfg(test)]
     pub fn without_lanes(mut self) -> Self {
         self.lanes = None;
+        self.l_values = vec![Matrix3::zeros(); self.k_values.len()];
+        self.d_inv = vec![Matrix3::zeros(); self.n];
         self
     }
 
