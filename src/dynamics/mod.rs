@@ -181,10 +181,11 @@ pub fn kinematics(model: &Model, q: &[f64], v: &[f64], ws: &mut Workspace) {
             ws.end_vel[e] = xdot;
         }
     }
-    for (n, end) in coords.node_end.iter().enumerate() {
+    let nodes = ws.node_pos.iter_mut().zip(ws.node_vel.iter_mut());
+    for (end, (x, xdot)) in coords.node_end.iter().zip(nodes) {
         if let Some(e) = *end {
-            ws.node_pos[n] = ws.end_pos[e];
-            ws.node_vel[n] = ws.end_vel[e];
+            *x = ws.end_pos[e];
+            *xdot = ws.end_vel[e];
         }
     }
 }

@@ -294,6 +294,7 @@ fn rest_length(rest: Rest, inputs: &Inputs) -> f64 {
 
 /// Whether [`value`] is `> 0`, without its square root where `|s|²` and `s₀²` are not within
 /// round-off of each other (there it takes the root, so the sign is always `value`'s).
+#[inline(always)]
 fn positive(s: &Switch, inputs: &Inputs, x: &[Vector3<f64>]) -> bool {
     if let Switch::Cable { a, b, rest } = *s {
         let p = |p: Point| match p {
