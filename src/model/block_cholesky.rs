@@ -20,9 +20,10 @@ const SINGULAR: f64 = 1e-12;
 pub struct BlockLdl {
     n: usize,
     /// K's lower blocks in L's layout (fill slots zero), set by the caller through
-    /// [`Self::k_index`]; the factorization overwrites them with the Schur complement's
-    /// blocks: `L_ik D_k` below the diagonal, for the updates of later columns, and `D_k` on
-    /// it. One array, so an evaluation streams K once (it matters for large structures).
+    /// [`Self::k_index`]; the scalar factorization overwrites them with the Schur
+    /// complement's blocks: `L_ik D_k` below the diagonal, for the updates of later columns,
+    /// and `D_k` on it (the lanes copy them instead). One array, so an evaluation streams K
+    /// once (it matters for large structures).
     pub k_values: Vec<Matrix3<f64>>,
     pattern: Pattern,
     l_values: Vec<Matrix3<f64>>,
@@ -187,7 +188,7 @@ impl BlockLdl {
         self.pattern.slot(row, col)
     }
 
-    /// Factors the current `k_values` (overwriting them); false if K is not (numerically)
+    /// Factors the current `k_values` (the scalar factor overwrites them); false if K is not (numerically)
     /// positive definite, which includes any NaN in it (a NaN reaches a pivot, and fails
     /// its test).
     pub fn factor(&mut self) -> bool {
@@ -248,7 +249,7 @@ impl BlockLdl {
     }
 
     /// K as a dense symmetric matrix (for the indeterminate fallback), from `k_values` as
-    /// set, before a factorization overwrites them.
+    /// set, before the scalar factorization overwrites them.
     pub fn dense(&self) -> nalgebra::DMatrix<f64> {
         let mut m = nalgebra::DMatrix::zeros(3 * self.n, 3 * self.n);
         for c in 0..self.n {
@@ -447,6 +448,27 @@ mod tests {
             let expected = dense.cholesky().unwrap().solve(&b);
             assert!((x - expected).amax() < 1e-12);
         }
+    }
+
+    /// At a large scale (tiny ≥ 1: light bars make K's entries ~1/m) the unused lane's
+    /// identity pivots must not fail the factor: side by side it succeeds as the scalar one
+    /// does, with the same bits.
+    #[test]
+    fn side_by_side_holds_at_any_scale() {
+        let (mut lanes, b) = three_chains(5);
+        for k in &mut lanes.k_values {
+            *k *= 1e13;
+        }
+        let mut scalar = lanes.clone().without_lanes();
+        assert!(scalar.factor());
+        assert!(lanes.factor(), "the padding lane failed its pivot test");
+        let (mut x, mut y) = (b.clone(), b.clone());
+        lanes.solve(&mut x);
+        scalar.solve(&mut y);
+        assert!(x
+            .iter()
+            .zip(y.iter())
+            .all(|(p, q)| p.to_bits() == q.to_bits()));
     }
 
     /// A singular pivot in one chain fails the factor side by side too.

@@ -24,7 +24,9 @@ pub struct LaneGroups {
     groups: Vec<LaneGroup>,
 }
 
-/// Up to [`LANES`] identical parts; lane `l` is part `l`, unused lanes hold the identity.
+/// Up to [`LANES`] identical parts; lane `l` is part `l`. Unused lanes hold identity pivots
+/// and zero blocks, which the factor keeps; their pivots are not tested (an identity pivot
+/// would fail the test once K's scale reaches 1e12).
 #[derive(Debug, Clone)]
 struct LaneGroup {
     /// The parts' common pattern, in a part's own column numbering.
@@ -57,7 +59,8 @@ impl LaneGroups {
             }
         }
         let mut shapes: Vec<Vec<(usize, usize)>> = vec![Vec::new(); components.len()];
-        for &(r, c) in lower_blocks {
+        // Off-diagonal blocks only: every column has its diagonal block.
+        for &(r, c) in lower_blocks.iter().filter(|(r, c)| r != c) {
             shapes[component_of[c]].push((local[r], local[c]));
         }
         for shape in &mut shapes {
@@ -137,7 +140,7 @@ impl LaneGroups {
 
     #[inline(always)]
     fn factor_lanes(&mut self, k_values: &[Matrix3<f64>], tiny: f64) -> bool {
-        // A plain loop: a closure-taking adapter would be compiled outside the AVX2 caller.
+        // A plain loop: `Iterator::all` was compiled out of line, outside the AVX2 caller.
         for group in &mut self.groups {
             if !group.factor(k_values, tiny) {
                 return false;
@@ -171,7 +174,7 @@ impl LaneGroup {
                 }
             }
         }
-        // Unused lanes: identity pivots, zero elsewhere, which the factor leaves as they are.
+        // Unused lanes: identity pivots and zero blocks (updates subtract zero products).
         let mut k = vec![[[0.0; LANES]; 9]; slots_n];
         for c in 0..m {
             for e in [0, 4, 8] {
@@ -214,7 +217,7 @@ impl LaneGroup {
                 );
             }
             let d_inv = &mut self.d_inv[c];
-            if !inverse3(&self.k[diagonal], tiny, d_inv) {
+            if !inverse3(&self.k[diagonal], tiny, self.used, d_inv) {
                 return false;
             }
             for p in diagonal + 1..pattern.l_start[c + 1] {
@@ -311,17 +314,17 @@ fn tr_mul_vector(a: &Block, x: &[Lanes; 3]) -> [Lanes; 3] {
     })
 }
 
-/// The scalar `inverse3` lane by lane, into `inv`; false if a pivot of any lane fails its
-/// test.
+/// The scalar `inverse3` lane by lane, into `inv`; false if a pivot of one of the first
+/// `used` lanes fails its test.
 #[inline(always)]
-fn inverse3(a: &Block, tiny: f64, inv: &mut Block) -> bool {
+fn inverse3(a: &Block, tiny: f64, used: usize, inv: &mut Block) -> bool {
     let (a00, a10, a20, a11, a21, a22) = (a[0], a[1], a[2], a[4], a[5], a[8]);
     let c00 = lanes(|l| a11[l] * a22[l] - a21[l] * a21[l]);
     let c10 = lanes(|l| a20[l] * a21[l] - a10[l] * a22[l]);
     let c20 = lanes(|l| a10[l] * a21[l] - a11[l] * a20[l]);
     let m2 = lanes(|l| a00[l] * a11[l] - a10[l] * a10[l]);
     let det = lanes(|l| a00[l] * c00[l] + a10[l] * c10[l] + a20[l] * c20[l]);
-    let pivots_pass = (0..LANES)
+    let pivots_pass = (0..used)
         .map(|l| a00[l] > tiny && m2[l] > tiny * a00[l] && det[l] > tiny * m2[l])
         .fold(true, |all, ok| all & ok);
     if !pivots_pass {

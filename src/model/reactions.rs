@@ -55,7 +55,7 @@ pub struct Reactions {
     term_start: Vec<usize>,
     terms: Vec<(usize, f64)>,
     /// The bar vectors and `1/|b|²` K was last assembled for (to assemble it again after a
-    /// failed factorization, which overwrites it).
+    /// failed factorization, which may have overwritten it).
     directions: Vec<(Vector3<f64>, f64)>,
     /// Sparse slots no contribution sets (see [`Contribution::first`]).
     unassigned: Vec<usize>,
@@ -140,9 +140,19 @@ impl Reactions {
         }
     }
 
+    /// The same system with the chains factored one after the other (the reference the
+    /// side-by-side factor is tested against).
+    #[cfg(test)]
+    pub(crate) fn without_lanes(mut self) -> Self {
+        if let Solver::Sparse(chol) = self.solver {
+            self.solver = Solver::Sparse(Box::new(chol.without_lanes()));
+        }
+        self
+    }
+
     /// Whether the sparse factor runs identical chains side by side.
     #[cfg(test)]
-    fn side_by_side(&self) -> bool {
+    pub(crate) fn side_by_side(&self) -> bool {
         matches!(&self.solver, Solver::Sparse(chol) if chol.has_lanes())
     }
 
