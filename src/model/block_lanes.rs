@@ -14,6 +14,12 @@ use super::block_cholesky::{BlockLdl, Pattern};
 
 /// Parts per group.
 const LANES: usize = 4;
+
+/// The most memory the lanes' copy of the factor may take. Beyond it (about 4,000 tower
+/// bars) the 4-wide copy streams from L3 or memory and costs more than the lanes save
+/// (`bench`, tower vs the scalar factor: 0.93× the time per step at 2,100 bars, 1.04× at
+/// 6,000, 1.27× at 60,000), so larger systems keep the scalar factor.
+const MAX_BYTES: usize = 2 << 20;
 type Lanes = [f64; LANES];
 /// One 3 × 3 block per lane, entry (i, j) at `3 j + i` (nalgebra's order).
 type Block = [Lanes; 9];
@@ -89,7 +95,8 @@ impl LaneGroups {
                 groups.push(LaneGroup::new(chol, &parts, &shapes[members[0]])?);
             }
         }
-        Some(Self { groups })
+        let bytes: usize = groups.iter().map(LaneGroup::bytes).sum();
+        (bytes <= MAX_BYTES).then_some(Self { groups })
     }
 
     /// Factors K as assembled in `k_values`; false if a pivot of any part fails.
@@ -191,6 +198,13 @@ impl LaneGroup {
             k,
             pattern,
         })
+    }
+
+    /// Memory of its factor and right-hand side.
+    fn bytes(&self) -> usize {
+        use std::mem::size_of;
+        (self.k.len() + self.l.len() + self.d_inv.len()) * size_of::<Block>()
+            + self.rhs.len() * size_of::<[Lanes; 3]>()
     }
 
     #[inline(always)]
