@@ -126,9 +126,11 @@ pub fn bar_vector(coords: &Coordinates, bar: usize, eta: &[f64], offset: bool) -
 
 #[inline]
 fn apply(dir: &[(usize, f64)], delta: &Vector3<f64>, eta: &mut [f64]) {
+    let eta = eta.as_chunks_mut::<3>().0;
     for &(g, c) in dir {
+        let at = &mut eta[g];
         for k in 0..3 {
-            eta[3 * g + k] += c * delta[k];
+            at[k] += c * delta[k];
         }
     }
 }
