@@ -277,8 +277,9 @@ fn bar_response_again(model: &Model, ws: &mut Workspace) {
     }
 }
 
-/// λ of a bar (as [`crate::model::inertia::BarInertia::lambda`], with `b`, `−|ḃ|²` and the
-/// reciprocal of its denominator given) for its end forces `f`, and its end accelerations.
+/// λ of a bar (compression positive), `(−|ḃ|² − b·(α f_a + β f_b)) / ((β − α)|b|²)` with
+/// `b`, `−|ḃ|²` and the reciprocal of the denominator given, for its end forces `f`, and
+/// its end accelerations.
 #[inline(always)]
 fn response(
     inertia: &crate::model::inertia::BarInertia,

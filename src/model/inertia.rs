@@ -4,8 +4,6 @@
 //! The step uses the inverse `W` and, for λ, `b̈ = α g_a + β g_b` with `α = W_ab − W_aa`,
 //! `β = W_bb − W_ab`.
 
-use nalgebra::{Matrix3, Vector3};
-
 /// The constant inverse mass data of one bar.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct BarInertia {
@@ -27,42 +25,23 @@ impl BarInertia {
         let (maa, mbb, mab) = (m / 3.0 + payload[0], m / 3.0 + payload[1], m / 6.0);
         let det = maa * mbb - mab * mab;
         let w = [[mbb / det, -mab / det], [-mab / det, maa / det]];
+        let (alpha, beta) = (w[0][1] - w[0][0], w[1][1] - w[0][1]);
         Self {
             m: [[maa, mab], [mab, mbb]],
             w,
-            alpha: w[0][1] - w[0][0],
-            beta: w[1][1] - w[0][1],
-            inv_beta_minus_alpha: 1.0 / ((w[1][1] - w[0][1]) - (w[0][1] - w[0][0])),
+            alpha,
+            beta,
+            inv_beta_minus_alpha: 1.0 / (beta - alpha),
         }
     }
 
-    /// End-acceleration response to end forces with λ eliminated, block (side i, side j):
-    /// `W_ij I − k_i k_j /(β − α) u uᵀ` with `k = (α, β)`.
-    #[inline]
-    pub fn compliance(&self, i: usize, j: usize, uu: &Matrix3<f64>) -> Matrix3<f64> {
-        let (w, c) = self.compliance_scalars(i, j);
-        Matrix3::identity() * w - uu * c
-    }
-
-    /// The two scalars of [`Self::compliance`]: `(W_ij, k_i k_j /(β − α))`.
+    /// End-acceleration response to end forces with λ eliminated, block (side i, side j),
+    /// is `W_ij I − k_i k_j /(β − α) u uᵀ` with `k = (α, β)`: its two scalars
+    /// `(W_ij, k_i k_j /(β − α))`.
     #[inline]
     pub fn compliance_scalars(&self, i: usize, j: usize) -> (f64, f64) {
         let k = [self.alpha, self.beta];
         (self.w[i][j], k[i] * k[j] / (self.beta - self.alpha))
-    }
-
-    /// λ (compression positive) for bar vector `b`, its rate `ḃ` and end forces `f_a`, `f_b`.
-    #[inline]
-    pub fn lambda(
-        &self,
-        b: &Vector3<f64>,
-        b_dot: &Vector3<f64>,
-        fa: &Vector3<f64>,
-        fb: &Vector3<f64>,
-    ) -> f64 {
-        let l2 = b.norm_squared();
-        (-b_dot.norm_squared() - b.dot(&(fa * self.alpha + fb * self.beta)))
-            / ((self.beta - self.alpha) * l2)
     }
 }
 
