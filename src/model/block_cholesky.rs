@@ -46,7 +46,7 @@ pub(super) struct Pattern {
 }
 
 /// One block update of the factorization, as slots in L's layout.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy)]
 pub(super) struct Update {
     pub target: usize,
     pub source: usize,
@@ -93,12 +93,10 @@ impl BlockLdl {
     /// Factors and solves with the side-by-side chains' portable (SSE2) code.
     #[cfg(test)]
     pub fn factor_and_solve_portable(&mut self, b: &mut DVector<f64>) -> bool {
-        let scale = (0..self.n)
-            .map(|k| diagonal_amax(&self.k_values[self.pattern.l_start[k]]))
-            .fold(0.0, f64::max);
+        let tiny = self.tiny();
         let lanes = self.lanes.as_mut().expect("side by side");
         let (b, _) = b.as_mut_slice().as_chunks_mut::<3>();
-        lanes.factor_and_solve_portable(&self.k_values, SINGULAR * scale, b)
+        lanes.factor_and_solve_portable(&self.k_values, tiny, b)
     }
 
     /// Whether identical chains are factored side by side.
@@ -192,12 +190,8 @@ impl BlockLdl {
     /// positive definite, which includes any NaN in it (a NaN reaches a pivot, and fails
     /// its test).
     pub fn factor(&mut self) -> bool {
+        let tiny = self.tiny();
         let pattern = &self.pattern;
-        let scale = pattern.l_start[..self.n]
-            .iter()
-            .map(|&d| diagonal_amax(&self.k_values[d]))
-            .fold(0.0, f64::max);
-        let tiny = SINGULAR * scale;
         if let Some(lanes) = &mut self.lanes {
             return lanes.factor(&self.k_values, tiny);
         }
@@ -246,6 +240,16 @@ impl BlockLdl {
             }
             b[k] = x.into();
         }
+    }
+
+    /// Pivots at or below this mean a singular K: [`SINGULAR`] times the largest magnitude
+    /// on K's diagonal as assembled.
+    fn tiny(&self) -> f64 {
+        let scale = self.pattern.l_start[..self.n]
+            .iter()
+            .map(|&d| diagonal_amax(&self.k_values[d]))
+            .fold(0.0, f64::max);
+        SINGULAR * scale
     }
 
     /// K as a dense symmetric matrix (for the indeterminate fallback), from `k_values` as

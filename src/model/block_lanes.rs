@@ -88,15 +88,27 @@ impl LaneGroups {
         if classes.iter().any(|class| class.len() < 2) {
             return None;
         }
+        // One symbolic factor per class; the memory checked before any lane is allocated.
+        let patterns: Vec<Pattern> = classes
+            .iter()
+            .map(|class| Pattern::new(components[class[0]].len(), &shapes[class[0]]))
+            .collect();
+        let bytes: usize = classes
+            .iter()
+            .zip(&patterns)
+            .map(|(class, pattern)| class.len().div_ceil(LANES) * LaneGroup::bytes(pattern))
+            .sum();
+        if bytes > MAX_BYTES {
+            return None;
+        }
         let mut groups = Vec::new();
-        for class in &classes {
+        for (class, pattern) in classes.iter().zip(&patterns) {
             for members in class.chunks(LANES) {
                 let parts: Vec<&[usize]> = members.iter().map(|&i| &components[i][..]).collect();
-                groups.push(LaneGroup::new(chol, &parts, &shapes[members[0]])?);
+                groups.push(LaneGroup::new(chol, &parts, pattern.clone())?);
             }
         }
-        let bytes: usize = groups.iter().map(LaneGroup::bytes).sum();
-        (bytes <= MAX_BYTES).then_some(Self { groups })
+        Some(Self { groups })
     }
 
     /// Factors K as assembled in `k_values`; false if a pivot of any part fails.
@@ -166,9 +178,8 @@ impl LaneGroups {
 
 impl LaneGroup {
     /// A group of `parts` (each its original columns, in order) of the common `shape`.
-    fn new(chol: &BlockLdl, parts: &[&[usize]], shape: &[(usize, usize)]) -> Option<Self> {
+    fn new(chol: &BlockLdl, parts: &[&[usize]], pattern: Pattern) -> Option<Self> {
         let m = parts[0].len();
-        let pattern = Pattern::new(m, shape);
         let slots_n = pattern.l_rows.len();
         let mut columns = vec![[0; LANES]; m];
         let mut slots = vec![[0; LANES]; slots_n];
@@ -200,11 +211,12 @@ impl LaneGroup {
         })
     }
 
-    /// Memory of its factor and right-hand side.
-    fn bytes(&self) -> usize {
+    /// Memory of a group's factor and right-hand side (`k`, `l`, `d_inv`, `rhs`) for its
+    /// parts' pattern.
+    fn bytes(pattern: &Pattern) -> usize {
         use std::mem::size_of;
-        (self.k.len() + self.l.len() + self.d_inv.len()) * size_of::<Block>()
-            + self.rhs.len() * size_of::<[Lanes; 3]>()
+        let (slots, columns) = (pattern.l_rows.len(), pattern.l_start.len() - 1);
+        (2 * slots + columns) * size_of::<Block>() + columns * size_of::<[Lanes; 3]>()
     }
 
     #[inline(always)]
