@@ -15,16 +15,24 @@ use super::block_lanes::LaneGroups;
 /// Pivots below this fraction of the largest diagonal entry mean a singular matrix.
 const SINGULAR: f64 = 1e-12;
 
+/// A symmetric 3 × 3 block by its lower triangle, column by column: (0, 0), (1, 0),
+/// (2, 0), (1, 1), (2, 1), (2, 2).
+pub type Symmetric = [f64; 6];
+/// Where each entry of a [`Symmetric`] is in a column-major 3 × 3 block.
+pub(super) const LOWER: [usize; 6] = [0, 1, 2, 4, 5, 8];
+/// Which entry of a [`Symmetric`] each entry of a column-major 3 × 3 block is.
+pub(super) const SYMMETRIC: [usize; 9] = [0, 1, 2, 1, 3, 4, 2, 4, 5];
+
 /// A block-sparse symmetric positive-definite matrix and its factor.
 #[derive(Debug, Clone)]
 pub struct BlockLdl {
     n: usize,
     /// K's lower blocks in L's layout (fill slots zero), set by the caller through
-    /// [`Self::k_index`]; the scalar factorization overwrites them with the Schur
-    /// complement's blocks: `L_ik D_k` below the diagonal, for the updates of later columns,
-    /// and `D_k` on it (the lanes copy them instead). One array, so an evaluation streams K
-    /// once (it matters for large structures).
-    pub k_values: Vec<Matrix3<f64>>,
+    /// [`Self::put_symmetric`] at [`Self::k_index`]; the scalar factorization overwrites them with
+    /// the Schur complement's blocks: `L_ik D_k` below the diagonal, for the updates of
+    /// later columns, and `D_k` on it. One array, so an evaluation streams K once (it
+    /// matters for large structures). Empty when the lanes hold K.
+    k_values: Vec<Matrix3<f64>>,
     pattern: Pattern,
     l_values: Vec<Matrix3<f64>>,
     /// `D_k⁻¹`, symmetric.
@@ -69,7 +77,8 @@ impl BlockLdl {
         };
         chol.lanes = LaneGroups::find(&chol, lower_blocks).map(Box::new);
         if chol.lanes.is_some() {
-            // The lanes keep their own factor.
+            // The lanes keep their own K and factor.
+            chol.k_values = Vec::new();
             chol.l_values = Vec::new();
             chol.d_inv = Vec::new();
         }
@@ -79,6 +88,7 @@ impl BlockLdl {
     /// The same without side-by-side chains (the reference the lanes are tested against).
     #[cfg(test)]
     pub fn without_lanes(mut self) -> Self {
+        self.k_values = (0..self.slots()).map(|p| self.block(p)).collect();
         self.lanes = None;
         self.l_values = vec![Matrix3::zeros(); self.k_values.len()];
         self.d_inv = vec![Matrix3::zeros(); self.n];
@@ -90,13 +100,54 @@ impl BlockLdl {
         self.n
     }
 
+    /// Number of lower blocks of K with fill (the slots [`Self::k_index`] returns).
+    pub fn slots(&self) -> usize {
+        self.pattern.l_rows.len()
+    }
+
+    /// Sets K's block at `slot`.
+    pub fn set(&mut self, slot: usize, block: &Matrix3<f64>) {
+        match &mut self.lanes {
+            Some(lanes) => lanes.set(slot, block),
+            None => self.k_values[slot] = *block,
+        }
+    }
+
+    /// Sets (`first`) or adds to K's block at `slot`, a symmetric one given by its lower
+    /// triangle (six sums, not nine).
+    #[inline(always)]
+    pub fn put_symmetric(&mut self, slot: usize, lower: &Symmetric, first: bool) {
+        let Some(lanes) = &mut self.lanes else {
+            let k = self.k_values[slot].as_mut_slice();
+            let sum: Symmetric = std::array::from_fn(|i| {
+                if first {
+                    lower[i]
+                } else {
+                    k[LOWER[i]] + lower[i]
+                }
+            });
+            for (e, &i) in SYMMETRIC.iter().enumerate() {
+                k[e] = sum[i];
+            }
+            return;
+        };
+        lanes.put_symmetric(slot, lower, first)
+    }
+
+    /// K's block at `slot` as last set (until a factorization overwrites it).
+    pub fn block(&self, slot: usize) -> Matrix3<f64> {
+        match &self.lanes {
+            Some(lanes) => lanes.block(slot),
+            None => self.k_values[slot],
+        }
+    }
+
     /// Factors and solves with the side-by-side chains' portable (SSE2) code.
     #[cfg(test)]
     pub fn factor_and_solve_portable(&mut self, b: &mut DVector<f64>) -> bool {
-        let tiny = self.tiny();
         let lanes = self.lanes.as_mut().expect("side by side");
         let (b, _) = b.as_mut_slice().as_chunks_mut::<3>();
-        lanes.factor_and_solve_portable(&self.k_values, tiny, b)
+        lanes.factor_and_solve_portable(SINGULAR, b)
     }
 
     /// Whether identical chains are factored side by side.
@@ -186,15 +237,14 @@ impl BlockLdl {
         self.pattern.slot(row, col)
     }
 
-    /// Factors the current `k_values` (the scalar factor overwrites them); false if K is not (numerically)
-    /// positive definite, which includes any NaN in it (a NaN reaches a pivot, and fails
-    /// its test).
+    /// Factors K as put (overwriting it); false if K is not (numerically) positive
+    /// definite, which includes any NaN in it (a NaN reaches a pivot, and fails its test).
     pub fn factor(&mut self) -> bool {
+        if let Some(lanes) = &mut self.lanes {
+            return lanes.factor(SINGULAR);
+        }
         let tiny = self.tiny();
         let pattern = &self.pattern;
-        if let Some(lanes) = &mut self.lanes {
-            return lanes.factor(&self.k_values, tiny);
-        }
         for k in 0..self.n {
             let diagonal = pattern.l_start[k];
             for u in &pattern.updates[pattern.update_start[k]..pattern.update_start[k + 1]] {
@@ -243,7 +293,7 @@ impl BlockLdl {
     }
 
     /// Pivots at or below this mean a singular K: [`SINGULAR`] times the largest magnitude
-    /// on K's diagonal as assembled.
+    /// on K's diagonal as assembled (the lanes find theirs the same way).
     fn tiny(&self) -> f64 {
         let scale = self.pattern.l_start[..self.n]
             .iter()
@@ -252,14 +302,14 @@ impl BlockLdl {
         SINGULAR * scale
     }
 
-    /// K as a dense symmetric matrix (for the indeterminate fallback), from `k_values` as
-    /// set, before the scalar factorization overwrites them.
+    /// K as a dense symmetric matrix (for the indeterminate fallback), as put, before a
+    /// factorization overwrites it.
     pub fn dense(&self) -> nalgebra::DMatrix<f64> {
         let mut m = nalgebra::DMatrix::zeros(3 * self.n, 3 * self.n);
         for c in 0..self.n {
             for p in self.pattern.l_start[c]..self.pattern.l_start[c + 1] {
                 let r = self.pattern.l_rows[p];
-                let block = self.k_values[p];
+                let block = self.block(p);
                 m.fixed_view_mut::<3, 3>(3 * r, 3 * c).copy_from(&block);
                 if r != c {
                     m.fixed_view_mut::<3, 3>(3 * c, 3 * r)
@@ -366,12 +416,12 @@ mod tests {
         let mut chol = BlockLdl::new(n, pattern);
         for &(r, c) in pattern {
             let idx = chol.k_index(r, c).unwrap();
-            chol.k_values[idx] = Matrix3::from_fn(|_, _| rand());
+            chol.set(idx, &Matrix3::from_fn(|_, _| rand()));
         }
         for k in 0..n {
             let a = Matrix3::from_fn(|_, _| rand());
             let idx = chol.k_index(k, k).unwrap();
-            chol.k_values[idx] = a * a.transpose() + Matrix3::identity() * 8.0;
+            chol.set(idx, &(a * a.transpose() + Matrix3::identity() * 8.0));
         }
         let b = DVector::from_fn(3 * n, |_, _| rand());
         (chol, b)
@@ -406,7 +456,7 @@ mod tests {
         let a = Matrix3::identity() * 4.0 - u * u.transpose() * 3.0;
         for (r, c, m) in [(0, 0, a), (1, 1, a), (1, 0, -a)] {
             let idx = chol.k_index(r, c).unwrap();
-            chol.k_values[idx] = m;
+            chol.set(idx, &m);
         }
         assert!(!chol.factor());
     }
@@ -460,8 +510,9 @@ mod tests {
     #[test]
     fn side_by_side_holds_at_any_scale() {
         let (mut lanes, b) = three_chains(5);
-        for k in &mut lanes.k_values {
-            *k *= 1e13;
+        for p in 0..lanes.slots() {
+            let k = lanes.block(p);
+            lanes.set(p, &(k * 1e13));
         }
         let mut scalar = lanes.clone().without_lanes();
         assert!(scalar.factor());
@@ -480,7 +531,7 @@ mod tests {
     fn a_singular_chain_fails_side_by_side() {
         let (mut chol, _) = three_chains(4);
         let idx = chol.k_index(4, 4).unwrap();
-        chol.k_values[idx] = Matrix3::zeros();
+        chol.set(idx, &Matrix3::zeros());
         assert!(chol.has_lanes());
         let mut scalar = chol.clone().without_lanes();
         assert!(!chol.factor());

@@ -10,7 +10,7 @@
 
 use nalgebra::Matrix3;
 
-use super::block_cholesky::{BlockLdl, Pattern};
+use super::block_cholesky::{BlockLdl, Pattern, Symmetric, LOWER, SYMMETRIC};
 
 /// Parts per group.
 const LANES: usize = 4;
@@ -24,10 +24,17 @@ type Lanes = [f64; LANES];
 /// One 3 × 3 block per lane, entry (i, j) at `3 j + i` (nalgebra's order).
 type Block = [Lanes; 9];
 
-/// K's parts in groups of identical ones.
+/// K's parts in groups of identical ones. K is assembled straight into the groups'
+/// layout (no gather before each factor).
 #[derive(Debug, Clone)]
 pub struct LaneGroups {
     groups: Vec<LaneGroup>,
+    /// The groups' blocks of K, group after group; the factor overwrites them as the scalar
+    /// one does its `k_values`.
+    k: Vec<Block>,
+    /// Per slot of the scalar layout, where its entry (0, 0) is in `k` as flat `f64`s (the
+    /// entry `e` is 4 `e` further).
+    lane_of: Vec<usize>,
 }
 
 /// Up to [`LANES`] identical parts; lane `l` is part `l`. Unused lanes hold identity pivots
@@ -39,10 +46,9 @@ struct LaneGroup {
     pattern: Pattern,
     /// Per local column, the original column of each used lane.
     columns: Vec<[usize; LANES]>,
-    /// Per local slot, the slot in `BlockLdl::k_values` of each used lane.
-    slots: Vec<[usize; LANES]>,
+    /// Where the group's blocks start in [`LaneGroups::k`].
+    k_start: usize,
     used: usize,
-    k: Vec<Block>,
     l: Vec<Block>,
     d_inv: Vec<Block>,
     rhs: Vec<[Lanes; 3]>,
@@ -101,24 +107,126 @@ impl LaneGroups {
         if bytes > MAX_BYTES {
             return None;
         }
-        let mut groups = Vec::new();
+        let mut lanes = Self {
+            groups: Vec::new(),
+            k: Vec::new(),
+            lane_of: vec![usize::MAX; chol.slots()],
+        };
         for (class, pattern) in classes.iter().zip(&patterns) {
             for members in class.chunks(LANES) {
                 let parts: Vec<&[usize]> = members.iter().map(|&i| &components[i][..]).collect();
-                groups.push(LaneGroup::new(chol, &parts, pattern.clone())?);
+                lanes.add_group(chol, &parts, pattern.clone())?;
             }
         }
-        Some(Self { groups })
+        Some(lanes)
     }
 
-    /// Factors K as assembled in `k_values`; false if a pivot of any part fails.
-    pub fn factor(&mut self, k_values: &[Matrix3<f64>], tiny: f64) -> bool {
+    /// Adds a group of `parts` (each its original columns, in order) of the common
+    /// `pattern`.
+    fn add_group(&mut self, chol: &BlockLdl, parts: &[&[usize]], pattern: Pattern) -> Option<()> {
+        let m = parts[0].len();
+        let k_start = self.k.len();
+        let mut columns = vec![[0; LANES]; m];
+        for (lane, part) in parts.iter().enumerate() {
+            for c in 0..m {
+                columns[c][lane] = part[c];
+                for p in pattern.l_start[c]..pattern.l_start[c + 1] {
+                    // Fill is the same as in K's own factor: a part keeps its columns' order.
+                    let slot = chol.k_index(part[pattern.l_rows[p]], part[c])?;
+                    self.lane_of[slot] = (k_start + p) * LANES * 9 + lane;
+                }
+            }
+        }
+        // Unused lanes: identity pivots and zero blocks (updates subtract zero products).
+        let slots = pattern.l_rows.len();
+        self.k.resize(k_start + slots, [[0.0; LANES]; 9]);
+        for c in 0..m {
+            for e in [0, 4, 8] {
+                self.k[k_start + pattern.l_start[c]][e][parts.len()..].fill(1.0);
+            }
+        }
+        self.groups.push(LaneGroup {
+            columns,
+            k_start,
+            used: parts.len(),
+            l: vec![[[0.0; LANES]; 9]; slots],
+            d_inv: vec![[[0.0; LANES]; 9]; m],
+            rhs: vec![[[0.0; LANES]; 3]; m],
+            pattern,
+        });
+        Some(())
+    }
+
+    /// Sets K's block at `slot` of the scalar layout.
+    pub fn set(&mut self, slot: usize, block: &Matrix3<f64>) {
+        let at = self.entries(slot);
+        for (e, &x) in block.as_slice().iter().enumerate() {
+            at[4 * e] = x;
+        }
+    }
+
+    /// Sets (`first`) or adds to K's symmetric block at `slot` of the scalar layout, given
+    /// by its lower triangle.
+    #[inline(always)]
+    pub fn put_symmetric(&mut self, slot: usize, lower: &Symmetric, first: bool) {
+        let at = self.entries(slot);
+        let sum: Symmetric = std::array::from_fn(|k| {
+            let x = lower[k];
+            if first {
+                x
+            } else {
+                at[4 * LOWER[k]] + x
+            }
+        });
+        for (e, &k) in SYMMETRIC.iter().enumerate() {
+            at[4 * e] = sum[k];
+        }
+    }
+
+    /// The flat entries from slot's (0, 0) through its (2, 2), lane strided.
+    #[inline(always)]
+    fn entries(&mut self, slot: usize) -> &mut [f64] {
+        let base = self.lane_of[slot];
+        let flat = self.k.as_flattened_mut().as_flattened_mut();
+        &mut flat[base..base + 4 * 8 + 1]
+    }
+
+    /// K's block at `slot` of the scalar layout, as last set (the factor overwrites it).
+    pub fn block(&self, slot: usize) -> Matrix3<f64> {
+        let base = self.lane_of[slot];
+        let flat = self.k.as_flattened().as_flattened();
+        Matrix3::from_column_slice(&std::array::from_fn::<f64, 9, _>(|e| flat[base + 4 * e]))
+    }
+
+    /// The largest magnitude on K's diagonal blocks' diagonals (NaNs skipped, as
+    /// `f64::max` does).
+    #[inline(always)]
+    fn diagonal_amax(&self) -> f64 {
+        let mut scale: f64 = 0.0;
+        for group in &self.groups {
+            let mut lane_max: Lanes = [0.0; LANES];
+            let pattern = &group.pattern;
+            for &d in &pattern.l_start[..group.columns.len()] {
+                let block = &self.k[group.k_start + d];
+                for e in [0, 4, 8] {
+                    lane_max = lanes(|l| lane_max[l].max(block[e][l].abs()));
+                }
+            }
+            scale = lane_max[..group.used]
+                .iter()
+                .fold(scale, |m, &x| f64::max(m, x));
+        }
+        scale
+    }
+
+    /// Factors K as assembled; false if a pivot of any part fails.
+    pub fn factor(&mut self, singular: f64) -> bool {
         #[cfg(target_arch = "x86_64")]
         if std::arch::is_x86_feature_detected!("avx2") {
             // SAFETY: the processor has AVX2.
-            return unsafe { self.factor_avx2(k_values, tiny) };
+            return unsafe { self.factor_avx2(singular) };
         }
-        self.factor_lanes(k_values, tiny)
+        self.factor_lanes(singular)
     }
 
     /// Solves `K x = b` in place (`b` by original column) with the last factor.
@@ -133,8 +241,8 @@ impl LaneGroups {
 
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2")]
-    unsafe fn factor_avx2(&mut self, k_values: &[Matrix3<f64>], tiny: f64) -> bool {
-        self.factor_lanes(k_values, tiny)
+    unsafe fn factor_avx2(&mut self, singular: f64) -> bool {
+        self.factor_lanes(singular)
     }
 
     #[cfg(target_arch = "x86_64")]
@@ -146,22 +254,20 @@ impl LaneGroups {
     /// [`Self::factor`] and [`Self::solve`] compiled for baseline x86-64 only (SSE2), as on
     /// a processor without AVX2.
     #[cfg(test)]
-    pub fn factor_and_solve_portable(
-        &mut self,
-        k: &[Matrix3<f64>],
-        tiny: f64,
-        b: &mut [[f64; 3]],
-    ) -> bool {
-        let ok = self.factor_lanes(k, tiny);
+    pub fn factor_and_solve_portable(&mut self, singular: f64, b: &mut [[f64; 3]]) -> bool {
+        let ok = self.factor_lanes(singular);
         self.solve_lanes(b);
         ok
     }
 
+    /// The factor with pivots tested against `singular` times K's largest diagonal entry.
     #[inline(always)]
-    fn factor_lanes(&mut self, k_values: &[Matrix3<f64>], tiny: f64) -> bool {
+    fn factor_lanes(&mut self, singular: f64) -> bool {
+        let tiny = singular * self.diagonal_amax();
         // A plain loop: `Iterator::all` was compiled out of line, outside the AVX2 caller.
         for group in &mut self.groups {
-            if !group.factor(k_values, tiny) {
+            let k = &mut self.k[group.k_start..group.k_start + group.l.len()];
+            if !group.factor(k, tiny) {
                 return false;
             }
         }
@@ -177,40 +283,6 @@ impl LaneGroups {
 }
 
 impl LaneGroup {
-    /// A group of `parts` (each its original columns, in order) of the common `shape`.
-    fn new(chol: &BlockLdl, parts: &[&[usize]], pattern: Pattern) -> Option<Self> {
-        let m = parts[0].len();
-        let slots_n = pattern.l_rows.len();
-        let mut columns = vec![[0; LANES]; m];
-        let mut slots = vec![[0; LANES]; slots_n];
-        for (lane, part) in parts.iter().enumerate() {
-            for c in 0..m {
-                columns[c][lane] = part[c];
-                for p in pattern.l_start[c]..pattern.l_start[c + 1] {
-                    // Fill is the same as in K's own factor: a part keeps its columns' order.
-                    slots[p][lane] = chol.k_index(part[pattern.l_rows[p]], part[c])?;
-                }
-            }
-        }
-        // Unused lanes: identity pivots and zero blocks (updates subtract zero products).
-        let mut k = vec![[[0.0; LANES]; 9]; slots_n];
-        for c in 0..m {
-            for e in [0, 4, 8] {
-                k[pattern.l_start[c]][e][parts.len()..].fill(1.0);
-            }
-        }
-        Some(Self {
-            columns,
-            slots,
-            used: parts.len(),
-            l: vec![[[0.0; LANES]; 9]; slots_n],
-            d_inv: vec![[[0.0; LANES]; 9]; m],
-            rhs: vec![[[0.0; LANES]; 3]; m],
-            k,
-            pattern,
-        })
-    }
-
     /// Memory of a group's factor and right-hand side (`k`, `l`, `d_inv`, `rhs`) for its
     /// parts' pattern.
     fn bytes(pattern: &Pattern) -> usize {
@@ -220,20 +292,13 @@ impl LaneGroup {
     }
 
     #[inline(always)]
-    fn factor(&mut self, k_values: &[Matrix3<f64>], tiny: f64) -> bool {
-        for (block, slots) in self.k.iter_mut().zip(&self.slots) {
-            for (lane, &slot) in slots.iter().enumerate().take(self.used) {
-                for (e, &x) in k_values[slot].as_slice().iter().enumerate() {
-                    block[e][lane] = x;
-                }
-            }
-        }
+    fn factor(&mut self, k: &mut [Block], tiny: f64) -> bool {
         let pattern = &self.pattern;
         for c in 0..self.columns.len() {
             let diagonal = pattern.l_start[c];
             for u in &pattern.updates[pattern.update_start[c]..pattern.update_start[c + 1]] {
                 // `with` is in an earlier column than `target`, so in an earlier slot.
-                let (earlier, from_target) = self.k.split_at_mut(u.target);
+                let (earlier, from_target) = k.split_at_mut(u.target);
                 let lower = u.target == diagonal;
                 subtract_abt(
                     &mut from_target[0],
@@ -243,11 +308,13 @@ impl LaneGroup {
                 );
             }
             let d_inv = &mut self.d_inv[c];
-            if !inverse3(&self.k[diagonal], tiny, self.used, d_inv) {
+            if !inverse3(&k[diagonal], tiny, self.used, d_inv) {
                 return false;
             }
+            // Indexed: zipping the two slices took 0.4% more instructions (callgrind).
+            #[allow(clippy::needless_range_loop)]
             for p in diagonal + 1..pattern.l_start[c + 1] {
-                mul_symmetric(&self.k[p], d_inv, &mut self.l[p]);
+                mul_symmetric(&k[p], d_inv, &mut self.l[p]);
             }
         }
         true

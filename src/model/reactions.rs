@@ -8,7 +8,7 @@
 
 use nalgebra::{DMatrix, DVector, Matrix3, Vector3};
 
-use super::block_cholesky::BlockLdl;
+use super::block_cholesky::{BlockLdl, Symmetric, SYMMETRIC};
 use super::coords::Coordinates;
 use super::inertia::BarInertia;
 
@@ -98,7 +98,7 @@ impl Reactions {
             Solver::Dense(_) => 3 * col * n + 3 * row,
         };
         let slots = match &solver {
-            Solver::Sparse(chol) => chol.k_values.len(),
+            Solver::Sparse(chol) => chol.slots(),
             Solver::Dense(_) => 0,
         };
         let mut assigned = vec![false; slots];
@@ -199,7 +199,7 @@ impl Reactions {
         match &mut self.solver {
             Solver::Sparse(chol) => {
                 for &p in &self.unassigned {
-                    chol.k_values[p] = Matrix3::zeros();
+                    chol.set(p, &Matrix3::zeros());
                 }
             }
             Solver::Dense(values) => values.fill(0.0),
@@ -215,12 +215,21 @@ impl Reactions {
             return;
         }
         self.directions[bar] = (*b, inv_l2);
-        let bb = b * b.transpose();
+        // b bᵀ's lower triangle (its upper one is the same products).
+        let bb: Symmetric = [
+            b.x * b.x,
+            b.y * b.x,
+            b.z * b.x,
+            b.y * b.y,
+            b.z * b.y,
+            b.z * b.z,
+        ];
         // A uniform rod: same end (4I − 3uuᵀ)/m, opposite ends (−2I + 3uuᵀ)/m.
-        let block = |c: &Contribution| {
-            let mut block = bb * (-c.along * inv_l2);
-            for k in 0..3 {
-                block[(k, k)] += c.diagonal;
+        let block = |c: &Contribution| -> Symmetric {
+            let s = -c.along * inv_l2;
+            let mut block = bb.map(|x| x * s);
+            for k in [0, 3, 5] {
+                block[k] += c.diagonal;
             }
             block
         };
@@ -228,12 +237,7 @@ impl Reactions {
         match &mut self.solver {
             Solver::Sparse(chol) => {
                 for c in contributions {
-                    let k = &mut chol.k_values[c.slot];
-                    if c.first {
-                        *k = block(c);
-                    } else {
-                        *k += block(c);
-                    }
+                    chol.put_symmetric(c.slot, &block(c), c.first);
                 }
             }
             Solver::Dense(values) => {
@@ -241,7 +245,8 @@ impl Reactions {
                     let block = block(c);
                     for j in 0..3 {
                         for i in 0..3 {
-                            values[c.slot + j * self.n + i] += block[(i, j)];
+                            let k = SYMMETRIC[3 * j + i];
+                            values[c.slot + j * self.n + i] += block[k];
                         }
                     }
                 }
@@ -298,10 +303,9 @@ impl Reactions {
     /// Whether K and the right-hand side are finite.
     fn finite(&self) -> bool {
         let k = match &self.solver {
-            Solver::Sparse(chol) => chol
-                .k_values
-                .iter()
-                .all(|b| b.iter().all(|x| x.is_finite())),
+            Solver::Sparse(chol) => {
+                (0..chol.slots()).all(|p| chol.block(p).iter().all(|x| x.is_finite()))
+            }
             Solver::Dense(values) => values.iter().all(|x| x.is_finite()),
         };
         k && self.rhs.iter().all(|x| x.is_finite())
