@@ -94,9 +94,20 @@ impl Quantity {
 }
 
 /// Component `axis` of the position (with `position`) or velocity of node `n` from the
-/// state, as the evaluation's kinematics computes it: the same arithmetic, so the same bits.
+/// state, as the evaluation's kinematics computes it: the same arithmetic, so the same bits
+/// (one axis only: an importer reads them one by one).
 fn node_from_state(sim: &Simulation, n: usize, axis: usize, position: bool) -> f64 {
-    node_vector_from_state(sim, n, position)[axis]
+    let model = sim.model();
+    match model.coords.node_end[n] {
+        Some(e) => {
+            let y = &sim.state().y;
+            let (positions, velocities) = y.split_at(y.len() / 2);
+            let eta = if position { positions } else { velocities };
+            model.coords.end_component(e, eta, position, axis)
+        }
+        None if position => model.positions[n][axis],
+        None => 0.0,
+    }
 }
 
 /// The position (with `position`) or velocity of node `n` from the state, through the

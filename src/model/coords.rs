@@ -274,6 +274,25 @@ impl Coordinates {
         x
     }
 
+    /// Component `axis` of [`Self::end_vector`], by the same arithmetic (so the same bits).
+    #[inline]
+    pub fn end_component(&self, e: End, eta: &[f64], offset: bool, axis: usize) -> f64 {
+        let mut x = if offset { self.fixed[e][axis] } else { 0.0 };
+        match &self.single {
+            Some(single) => {
+                if let Some((g, c)) = single[e] {
+                    x += eta[3 * g + axis] * c;
+                }
+            }
+            None => {
+                for &(g, c) in self.row(e) {
+                    x += eta[3 * g + axis] * c;
+                }
+            }
+        }
+        x
+    }
+
     /// [`Self::end_vector`] through the general rows (the dense basis).
     fn end_vector_csr(&self, e: End, eta: &[f64], offset: bool) -> Vector3<f64> {
         let mut x = if offset {
