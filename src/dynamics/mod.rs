@@ -310,7 +310,16 @@ fn pairs_mut(ends: &mut [Vector3<f64>]) -> &mut [[Vector3<f64>; 2]] {
 /// forces.
 fn add_reactions(ws: &mut Workspace) {
     ws.reactions.set_rhs(&ws.end_acc);
-    if !ws.reactions.solve() {
+    // After a failed factor, K again from the bar vectors [`bar_response`] kept (the same
+    // arithmetic, so the same K).
+    let bars = &ws.bars;
+    let assemble_again = |r: &mut Reactions| {
+        r.clear();
+        for (i, (bv, _, _)) in bars.iter().enumerate() {
+            r.add_bar(i, bv, 1.0 / bv.norm_squared());
+        }
+    };
+    if !ws.reactions.solve(assemble_again) {
         ws.dense_fallbacks += 1;
     }
     ws.reactions.add_to(&mut ws.end_force);
@@ -352,6 +361,57 @@ mod tests {
                 assert_eq!(a.to_bits(), b.to_bits());
             }
             assert_eq!(ws.dense_fallbacks + ws_ref.dense_fallbacks, 0);
+        }
+    }
+
+    /// A K that turns singular during a run (a rigid frame) fails the sparse factor in the
+    /// evaluation itself: the dense fallback must see K as assembled again from the bar
+    /// vectors, not as the failed factor left it, and so match the dense system's
+    /// accelerations.
+    #[test]
+    fn a_failed_factor_in_an_evaluation_falls_back_on_k_as_assembled() {
+        let scene = crate::scene::Scene::from_toml_str(
+            r#"
+            name = "frame"
+            nodes = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.1], [0.4, 0.9, 0.0], [0.5, 0.3, 0.8], [0.9, 0.8, 0.7]]
+            bars = [
+                { nodes = [1, 2], mass = 1.0 }, { nodes = [1, 3], mass = 2.0 },
+                { nodes = [1, 4], mass = 1.5 }, { nodes = [1, 5], mass = 1.0 },
+                { nodes = [2, 3], mass = 1.2 }, { nodes = [2, 4], mass = 0.8 },
+                { nodes = [2, 5], mass = 1.1 }, { nodes = [3, 4], mass = 0.9 },
+                { nodes = [3, 5], mass = 1.3 }, { nodes = [4, 5], mass = 1.4 },
+            ]
+            gravity = [0.0, 0.0, -9.81]
+            "#,
+        )
+        .unwrap();
+        let dense = Model::new(&scene).unwrap();
+        let mut sparse = dense.clone();
+        sparse.reactions = Reactions::new(&sparse.coords, &sparse.inertia, false);
+        let coords = &dense.coords;
+        let mut q = vec![0.0; 3 * coords.r];
+        for e in 0..coords.n_ends() {
+            coords.scatter(e, &dense.positions[coords.end_node[e]], &mut q);
+        }
+        // Moving ends (the bars' |ḃ|² terms), so that Ω is not zero as in a free fall.
+        let v: Vec<f64> = (0..q.len()).map(|i| (i as f64 * 0.71).sin()).collect();
+        let inputs = Inputs::start(&dense);
+        let mut acc = [vec![0.0; q.len()], vec![0.0; q.len()]];
+        let mut fallbacks = [0, 0];
+        for (k, model) in [&dense, &sparse].into_iter().enumerate() {
+            let mut ws = Workspace::new(model);
+            accelerations(model, &inputs, 0.0, &q, &v, &mut ws, &mut acc[k]);
+            fallbacks[k] = ws.dense_fallbacks;
+        }
+        assert_eq!(
+            fallbacks,
+            [0, 1],
+            "the sparse factor fails once, the dense never"
+        );
+        let scale = acc[0].iter().fold(0.0_f64, |m, a| m.max(a.abs()));
+        assert!(scale > 1.0, "gravity accelerates the frame's free ends");
+        for (a, b) in acc[0].iter().zip(&acc[1]) {
+            assert!((a - b).abs() <= 1e-9 * scale, "{a} vs {b}");
         }
     }
 }

@@ -215,7 +215,7 @@ impl Model {
             .map(|b| (positions[b.nodes[1]] - positions[b.nodes[0]]) / b.length)
             .collect();
         reactions.assemble(&units);
-        if !reactions.solve() {
+        if !reactions.solve(|r| r.assemble(&units)) {
             warnings.push(
                 "the joint reactions are statically indeterminate (bars form a rigid frame); \
                  they use the minimum-norm dense solve, whose cost grows faster than linearly"

@@ -54,9 +54,6 @@ pub struct Reactions {
     /// `term_start[c]..term_start[c + 1]`.
     term_start: Vec<usize>,
     terms: Vec<(usize, f64)>,
-    /// The bar vectors and `1/|b|²` K was last assembled for (to assemble it again after a
-    /// failed factorization, which may have overwritten it).
-    directions: Vec<(Vector3<f64>, f64)>,
     /// Sparse slots no contribution sets (see [`Contribution::first`]).
     unassigned: Vec<usize>,
 }
@@ -135,7 +132,6 @@ impl Reactions {
             rhs: DVector::zeros(n),
             term_start,
             terms,
-            directions: vec![(Vector3::zeros(), 0.0); n_bars],
             unassigned,
         }
     }
@@ -214,7 +210,6 @@ impl Reactions {
         if start == end {
             return;
         }
-        self.directions[bar] = (*b, inv_l2);
         // b bᵀ's lower triangle (its upper one is the same products).
         let bb: Symmetric = [
             b.x * b.x,
@@ -255,8 +250,11 @@ impl Reactions {
     }
 
     /// Solves `K Ω = rhs` in place; returns false when the sparse factor failed and the
-    /// dense fallback was used (a statically indeterminate configuration).
-    pub fn solve(&mut self) -> bool {
+    /// dense fallback was used (a statically indeterminate configuration). The factor
+    /// overwrites K, so the fallback calls `assemble_again` to assemble the same K again
+    /// (the caller still has the bar vectors; keeping a copy here would cost every
+    /// evaluation).
+    pub fn solve(&mut self, assemble_again: impl FnOnce(&mut Self)) -> bool {
         if self.n == 0 {
             return true;
         }
@@ -271,12 +269,7 @@ impl Reactions {
             return true;
         }
         if matches!(self.solver, Solver::Sparse(_)) {
-            // The failed factorization overwrote K: assemble it again for the fallback.
-            self.clear();
-            for bar in 0..self.directions.len() {
-                let (b, inv_l2) = self.directions[bar];
-                self.add_bar(bar, &b, inv_l2);
-            }
+            assemble_again(self);
         }
         // A NaN fails a pivot, so only a failed or dense solve scans: non-finite data would
         // stall the SVD; let the NaN reach the state check, which restores the last good
@@ -366,10 +359,10 @@ mod tests {
             r.rhs = DVector::from_fn(r.size(), |i, _| (i as f64 + 1.0).sin());
         }
         assert!(
-            !sparse.solve(),
+            !sparse.solve(|r| r.assemble(&units)),
             "the sparse factorization fails on a rigid frame"
         );
-        assert!(dense.solve());
+        assert!(dense.solve(|_| unreachable!("a dense K is kept")));
         let diff = (&sparse.rhs - &dense.rhs).amax();
         assert!(diff <= 1e-12 * dense.rhs.amax(), "differ by {diff:e}");
     }
