@@ -136,15 +136,21 @@ fn node_vector_from_state(sim: &Simulation, n: usize, position: bool) -> Vector3
 #[derive(Debug, Clone)]
 pub struct RowReader {
     reads: Vec<Read>,
+    /// Values per row, the time included.
+    row_len: usize,
 }
 
-#[derive(Debug, Clone, Copy)]
+#[derive(Debug, Clone)]
 enum Read {
     /// A node's position (with `position`) or velocity, all three axes.
     Node {
         node: usize,
         position: bool,
     },
+    /// Consecutive cables' tensions, in one loop.
+    Tensions(std::ops::Range<usize>),
+    /// Consecutive bars' axial forces, in one loop.
+    BarForces(std::ops::Range<usize>),
     One(Quantity),
 }
 
@@ -154,28 +160,65 @@ impl RowReader {
         let mut reads = Vec::new();
         let mut rest = table;
         while let Some(first) = rest.first() {
-            let (read, taken) = match node_at(rest) {
-                Some(read) => (read, 3),
-                None => (Read::One(first.quantity), 1),
-            };
+            let read = node_at(rest)
+                .or_else(|| run_at(rest))
+                .unwrap_or(Read::One(first.quantity));
+            rest = &rest[read.len()..];
             reads.push(read);
-            rest = &rest[taken..];
         }
-        Self { reads }
+        let row_len = table.len() + 1;
+        Self { reads, row_len }
     }
 
     /// Appends the time, then each value of the table, to `out`.
     pub fn read(&self, sim: &Simulation, out: &mut Vec<f64>) {
+        out.reserve(self.row_len);
         out.push(sim.time());
         for read in &self.reads {
-            match *read {
+            match read {
                 Read::Node { node, position } => {
-                    out.extend_from_slice(node_vector_from_state(sim, node, position).as_slice())
+                    let x = node_vector_from_state(sim, *node, *position);
+                    out.extend([x.x, x.y, x.z]);
                 }
+                Read::Tensions(cables) => out.extend(cables.clone().map(|j| sim.cable_tension(j))),
+                Read::BarForces(bars) => out.extend(bars.clone().map(|i| sim.bar_force(i))),
                 Read::One(q) => out.push(q.value(sim)),
             }
         }
     }
+}
+
+impl Read {
+    /// Values it reads.
+    fn len(&self) -> usize {
+        match self {
+            Self::Node { .. } => 3,
+            Self::Tensions(range) | Self::BarForces(range) => range.len(),
+            Self::One(_) => 1,
+        }
+    }
+}
+
+/// The run of consecutive cable tensions or bar forces (j, j + 1, …) that starts `table`,
+/// if one does.
+fn run_at(table: &[Output]) -> Option<Read> {
+    let index = |q: Quantity| match q {
+        Quantity::CableTension(j) => Some((0, j)),
+        Quantity::BarForce(i) => Some((1, i)),
+        _ => None,
+    };
+    let (kind, first) = index(table.first()?.quantity)?;
+    let len = table
+        .iter()
+        .enumerate()
+        .take_while(|(k, o)| index(o.quantity) == Some((kind, first + k)))
+        .count();
+    let range = first..first + len;
+    Some(if kind == 0 {
+        Read::Tensions(range)
+    } else {
+        Read::BarForces(range)
+    })
 }
 
 /// The node whose x, y, z (positions or velocities) start `table`, if they do.

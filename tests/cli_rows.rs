@@ -360,12 +360,15 @@ fn the_row_reader_reads_the_bits_each_output_reads() {
             sim.advance_to(k as f64 * 1e-3).unwrap();
             sim.refresh();
             for table in [&full, &positions, &shuffled] {
+                // Appended after what the buffer holds, as a chunk of rows is filled.
                 values.clear();
+                values.push(-1.0);
                 RowReader::new(table).read(&sim, &mut values);
                 let each =
                     std::iter::once(sim.time()).chain(table.iter().map(|o| o.quantity.value(&sim)));
-                assert_eq!(values.len(), table.len() + 1);
-                for ((read, one), column) in values.iter().zip(each).zip(0..) {
+                assert_eq!(values.len(), table.len() + 2);
+                assert_eq!(values[0], -1.0, "what the buffer held is kept");
+                for ((read, one), column) in values[1..].iter().zip(each).zip(0..) {
                     assert_eq!(read.to_bits(), one.to_bits(), "{name}, column {column}");
                 }
             }
