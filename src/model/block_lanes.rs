@@ -32,8 +32,7 @@ pub struct LaneGroups {
     /// The groups' blocks of K, group after group; the factor overwrites them as the scalar
     /// one does its `k_values`.
     k: Vec<Block>,
-    /// Per slot of the scalar layout, where its entry (0, 0) is in `k` as flat `f64`s (the
-    /// entry `e` is 4 `e` further).
+    /// Per slot of the scalar layout, its block in `k` times [`LANES`], plus its lane.
     lane_of: Vec<usize>,
 }
 
@@ -133,7 +132,7 @@ impl LaneGroups {
                 for p in pattern.l_start[c]..pattern.l_start[c + 1] {
                     // Fill is the same as in K's own factor: a part keeps its columns' order.
                     let slot = chol.k_index(part[pattern.l_rows[p]], part[c])?;
-                    self.lane_of[slot] = (k_start + p) * LANES * 9 + lane;
+                    self.lane_of[slot] = (k_start + p) * LANES + lane;
                 }
             }
         }
@@ -159,9 +158,9 @@ impl LaneGroups {
 
     /// Sets K's block at `slot` of the scalar layout.
     pub fn set(&mut self, slot: usize, block: &Matrix3<f64>) {
-        let at = self.entries(slot);
+        let (at, lane) = self.entries(slot);
         for (e, &x) in block.as_slice().iter().enumerate() {
-            at[4 * e] = x;
+            at[e][lane] = x;
         }
     }
 
@@ -169,33 +168,32 @@ impl LaneGroups {
     /// by its lower triangle.
     #[inline(always)]
     pub fn put_symmetric(&mut self, slot: usize, lower: &Symmetric, first: bool) {
-        let at = self.entries(slot);
+        let (at, lane) = self.entries(slot);
         let sum: Symmetric = std::array::from_fn(|k| {
             let x = lower[k];
             if first {
                 x
             } else {
-                at[4 * LOWER[k]] + x
+                at[LOWER[k]][lane] + x
             }
         });
         for (e, &k) in SYMMETRIC.iter().enumerate() {
-            at[4 * e] = sum[k];
+            at[e][lane] = sum[k];
         }
     }
 
-    /// The flat entries from slot's (0, 0) through its (2, 2), lane strided.
+    /// The block of `slot` and its lane (masked, so that indexing needs no check).
     #[inline(always)]
-    fn entries(&mut self, slot: usize) -> &mut [f64] {
-        let base = self.lane_of[slot];
-        let flat = self.k.as_flattened_mut().as_flattened_mut();
-        &mut flat[base..base + 4 * 8 + 1]
+    fn entries(&mut self, slot: usize) -> (&mut Block, usize) {
+        let at = self.lane_of[slot];
+        (&mut self.k[at / LANES], at % LANES)
     }
 
     /// K's block at `slot` of the scalar layout, as last set (the factor overwrites it).
     pub fn block(&self, slot: usize) -> Matrix3<f64> {
-        let base = self.lane_of[slot];
-        let flat = self.k.as_flattened().as_flattened();
-        Matrix3::from_column_slice(&std::array::from_fn::<f64, 9, _>(|e| flat[base + 4 * e]))
+        let at = self.lane_of[slot];
+        let (block, lane) = (&self.k[at / LANES], at % LANES);
+        Matrix3::from_fn(|i, j| block[3 * j + i][lane])
     }
 
     /// The largest magnitude on K's diagonal blocks' diagonals (NaNs skipped, as
