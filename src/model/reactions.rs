@@ -167,6 +167,7 @@ impl Reactions {
     }
 
     /// Sets the right-hand side to `−N̈ P` for the end accelerations without reactions.
+    #[inline(always)]
     pub fn set_rhs(&mut self, end_acc: &[Vector3<f64>]) {
         let (rhs, _) = self.rhs.as_mut_slice().as_chunks_mut::<3>();
         for (r, span) in rhs.iter_mut().zip(self.term_start.windows(2)) {
@@ -179,6 +180,7 @@ impl Reactions {
     }
 
     /// Adds the solved reactions `Ω P` to the end forces.
+    #[inline(always)]
     pub fn add_to(&self, end_force: &mut [Vector3<f64>]) {
         let (omega, _) = self.rhs.as_slice().as_chunks::<3>();
         for (o, span) in omega.iter().zip(self.term_start.windows(2)) {
@@ -191,6 +193,7 @@ impl Reactions {
 
     /// Readies K for [`Self::add_bar`] of every bar in order (sparse: zeroes only the slots
     /// no bar sets).
+    #[inline(always)]
     pub fn clear(&mut self) {
         match &mut self.solver {
             Solver::Sparse(chol) => {
@@ -254,6 +257,7 @@ impl Reactions {
     /// overwrites K, so the fallback calls `assemble_again` to assemble the same K again
     /// (the caller still has the bar vectors; keeping a copy here would cost every
     /// evaluation).
+    #[inline(always)]
     pub fn solve(&mut self, assemble_again: impl FnOnce(&mut Self)) -> bool {
         if self.n == 0 {
             return true;

@@ -314,8 +314,6 @@ impl Simulation {
     fn correct(&mut self) {
         let half = self.state.y.len() / 2;
         let (q, v) = self.state.y.split_at_mut(half);
-        let plan = &self.model.correction;
-        plan.correct_positions(&self.model.coords, q);
-        plan.correct_velocities(&self.model.coords, q, v);
+        self.model.correction.correct(&self.model.coords, q, v);
     }
 }
