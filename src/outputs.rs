@@ -130,7 +130,8 @@ fn node_vector_from_state(sim: &Simulation, n: usize, position: bool) -> Vector3
 /// Reads a table's values faster than output by output: the three position (or velocity)
 /// components of a node, one after the other as [`outputs`] lists them, are read together
 /// as the kinematics computes them ([`Coordinates::end_vector`]), which shares the node's
-/// lookups; the same bits as [`Quantity::value`].
+/// lookups, and runs of consecutive cable tensions or bar forces in one loop each; the same
+/// bits as [`Quantity::value`].
 ///
 /// [`Coordinates::end_vector`]: crate::model::coords::Coordinates::end_vector
 #[derive(Debug, Clone)]
@@ -202,19 +203,20 @@ impl Read {
 /// The run of consecutive cable tensions or bar forces (j, j + 1, …) that starts `table`,
 /// if one does.
 fn run_at(table: &[Output]) -> Option<Read> {
+    // (whether a tension, index)
     let index = |q: Quantity| match q {
-        Quantity::CableTension(j) => Some((0, j)),
-        Quantity::BarForce(i) => Some((1, i)),
+        Quantity::CableTension(j) => Some((true, j)),
+        Quantity::BarForce(i) => Some((false, i)),
         _ => None,
     };
-    let (kind, first) = index(table.first()?.quantity)?;
+    let (tension, first) = index(table.first()?.quantity)?;
     let len = table
         .iter()
         .enumerate()
-        .take_while(|(k, o)| index(o.quantity) == Some((kind, first + k)))
+        .take_while(|(k, o)| index(o.quantity) == Some((tension, first + k)))
         .count();
     let range = first..first + len;
-    Some(if kind == 0 {
+    Some(if tension {
         Read::Tensions(range)
     } else {
         Read::BarForces(range)

@@ -68,7 +68,8 @@ pub struct Workspace {
     /// Ground contact force per contact point (`Ground::nodes` order), N.
     pub contact_force: Vec<Vector3<f64>>,
     /// Per bar, what λ needs besides the end forces: `(b, −|ḃ|², 1/((β − α)|b|²))`, kept
-    /// from the first λ pass for the second.
+    /// from the first λ pass for the second (and `b` to assemble K again after a failed
+    /// factor).
     bars: Vec<(Vector3<f64>, f64, f64)>,
     reactions: Reactions,
     /// Evaluations where the sparse reaction factor failed and the dense solve was used.
@@ -355,6 +356,7 @@ fn add_reactions(ws: &mut Workspace) {
     // After a failed factor, K again from the bar vectors [`bar_response`] kept (the same
     // arithmetic, so the same K).
     let bars = &ws.bars;
+    // A static bar's entry is never set, but it has no blocks either: `add_bar` returns.
     let assemble_again = |r: &mut Reactions| {
         r.clear();
         for (i, (bv, _, _)) in bars.iter().enumerate() {
@@ -368,152 +370,4 @@ fn add_reactions(ws: &mut Workspace) {
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::scene::builtin;
-
-    /// The reduced positions of the model's start geometry.
-    fn start_positions(model: &Model) -> Vec<f64> {
-        let coords = &model.coords;
-        let mut q = vec![0.0; 3 * coords.r];
-        for e in 0..coords.n_ends() {
-            coords.scatter(e, &model.positions[coords.end_node[e]], &mut q);
-        }
-        q
-    }
-
-    /// The `k`-th state of a sequence away from rest: `q0` moved by up to 1 cm, velocities
-    /// up to 0.1 m/s.
-    fn moved(q0: &[f64], k: usize) -> (Vec<f64>, Vec<f64>) {
-        let wave = |i: usize, f: f64| 1e-2 * ((i * 7 + k * 13) as f64 * f).sin();
-        let q = q0
-            .iter()
-            .enumerate()
-            .map(|(i, x)| x + wave(i, 0.37))
-            .collect();
-        let v = (0..q0.len()).map(|i| 10.0 * wave(i, 0.71)).collect();
-        (q, v)
-    }
-
-    /// tower20's accelerations with its three chains of joints factored side by side are the
-    /// bits of the chains factored one after the other, at states away from rest.
-    #[test]
-    fn side_by_side_chains_give_the_same_accelerations() {
-        let model = Model::new(&builtin("tower20").unwrap()).unwrap();
-        let mut reference = model.clone();
-        reference.reactions = reference.reactions.without_lanes();
-        assert!(model.reactions.side_by_side() && !reference.reactions.side_by_side());
-        let q0 = start_positions(&model);
-        let inputs = Inputs::start(&model);
-        let (mut ws, mut ws_ref) = (Workspace::new(&model), Workspace::new(&reference));
-        let (mut acc, mut acc_ref) = (vec![0.0; q0.len()], vec![0.0; q0.len()]);
-        for k in 0..20 {
-            let (q, v) = moved(&q0, k);
-            accelerations(&model, &inputs, 0.0, &q, &v, &mut ws, &mut acc);
-            accelerations(&reference, &inputs, 0.0, &q, &v, &mut ws_ref, &mut acc_ref);
-            assert!(acc.iter().any(|a| a.abs() > 1e-3), "a state away from rest");
-            for (a, b) in acc.iter().zip(&acc_ref) {
-                assert_eq!(a.to_bits(), b.to_bits());
-            }
-            assert_eq!(ws.dense_fallbacks + ws_ref.dense_fallbacks, 0);
-        }
-    }
-
-    /// A K that turns singular during a run (a rigid frame) fails the sparse factor in the
-    /// evaluation itself: the dense fallback must see K as assembled again from the bar
-    /// vectors, not as the failed factor left it, and so match the dense system's
-    /// accelerations.
-    #[test]
-    fn a_failed_factor_in_an_evaluation_falls_back_on_k_as_assembled() {
-        let scene = crate::scene::Scene::from_toml_str(
-            r#"
-            name = "frame"
-            nodes = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.1], [0.4, 0.9, 0.0], [0.5, 0.3, 0.8], [0.9, 0.8, 0.7]]
-            bars = [
-                { nodes = [1, 2], mass = 1.0 }, { nodes = [1, 3], mass = 2.0 },
-                { nodes = [1, 4], mass = 1.5 }, { nodes = [1, 5], mass = 1.0 },
-                { nodes = [2, 3], mass = 1.2 }, { nodes = [2, 4], mass = 0.8 },
-                { nodes = [2, 5], mass = 1.1 }, { nodes = [3, 4], mass = 0.9 },
-                { nodes = [3, 5], mass = 1.3 }, { nodes = [4, 5], mass = 1.4 },
-            ]
-            gravity = [0.0, 0.0, -9.81]
-            "#,
-        )
-        .unwrap();
-        let dense = Model::new(&scene).unwrap();
-        let mut sparse = dense.clone();
-        sparse.reactions = Reactions::new(&sparse.coords, &sparse.inertia, false);
-        let q = start_positions(&dense);
-        // Moving ends (the bars' |ḃ|² terms), so that Ω is not zero as in a free fall.
-        let v: Vec<f64> = (0..q.len()).map(|i| (i as f64 * 0.71).sin()).collect();
-        let inputs = Inputs::start(&dense);
-        let mut acc = [vec![0.0; q.len()], vec![0.0; q.len()]];
-        let mut fallbacks = [0, 0];
-        for (k, model) in [&dense, &sparse].into_iter().enumerate() {
-            let mut ws = Workspace::new(model);
-            accelerations(model, &inputs, 0.0, &q, &v, &mut ws, &mut acc[k]);
-            fallbacks[k] = ws.dense_fallbacks;
-        }
-        assert_eq!(
-            fallbacks,
-            [0, 1],
-            "the sparse factor fails once, the dense never"
-        );
-        let scale = acc[0].iter().fold(0.0_f64, |m, a| m.max(a.abs()));
-        assert!(scale > 1.0, "gravity accelerates the frame's free ends");
-        for (a, b) in acc[0].iter().zip(&acc[1]) {
-            assert!((a - b).abs() <= 1e-9 * scale, "{a} vs {b}");
-        }
-    }
-
-    /// The evaluation compiled for AVX2 (used where the processor has it) gives the bits of
-    /// the baseline x86-64 one, for every kind of effect: joints side by side (tower20),
-    /// controlled cables in the sparse and the dense basis (prism2), and damped cables,
-    /// payloads, gravity and ground contact with friction (icosahedron-dropped), at states
-    /// away from rest.
-    #[test]
-    fn the_avx2_evaluation_gives_the_portable_bits() {
-        let mut dropped = crate::scene::Scene::from_toml_str(include_str!(
-            "../../fmu/scenes/icosahedron-dropped.toml"
-        ))
-        .unwrap();
-        // Lowered from 0.3 m to 5 mm into the ground, so that its contacts push.
-        dropped.nodes.iter_mut().for_each(|x| x[2] -= 0.305);
-        let models = [
-            Model::new(&builtin("tower20").unwrap()).unwrap(),
-            Model::new(&builtin("prism2").unwrap()).unwrap(),
-            Model::with_basis(&builtin("prism2").unwrap(), crate::model::BasisKind::Dense).unwrap(),
-            Model::new(&dropped).unwrap(),
-        ];
-        for model in &models {
-            let q0 = start_positions(model);
-            let mut inputs = Inputs::start(model);
-            inputs.force_density.iter_mut().for_each(|g| *g += 3.0);
-            let (mut ws, mut ws_portable) = (Workspace::new(model), Workspace::new(model));
-            let (mut acc, mut acc_portable) = (vec![0.0; q0.len()], vec![0.0; q0.len()]);
-            let mut pushed = 0;
-            for k in 0..10 {
-                let (q, v) = moved(&q0, k);
-                accelerations(model, &inputs, 0.1, &q, &v, &mut ws, &mut acc);
-                evaluate(
-                    model,
-                    &inputs,
-                    0.1,
-                    &q,
-                    &v,
-                    &mut ws_portable,
-                    &mut acc_portable,
-                );
-                assert!(acc.iter().any(|a| a.abs() > 1e-3), "a state away from rest");
-                for (a, b) in acc.iter().zip(&acc_portable) {
-                    assert_eq!(a.to_bits(), b.to_bits(), "{}", model.scene.name);
-                }
-                for (a, b) in ws.gamma.iter().zip(&ws_portable.gamma) {
-                    assert_eq!(a.to_bits(), b.to_bits(), "{}: γ", model.scene.name);
-                }
-                pushed += ws.contact_force.iter().filter(|f| f.z > 0.0).count();
-            }
-            assert_eq!(pushed > 0, model.ground.is_some(), "{}", model.scene.name);
-        }
-    }
-}
+mod tests;

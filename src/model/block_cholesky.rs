@@ -117,21 +117,22 @@ impl BlockLdl {
     /// triangle (six sums, not nine).
     #[inline(always)]
     pub fn put_symmetric(&mut self, slot: usize, lower: &Symmetric, first: bool) {
-        let Some(lanes) = &mut self.lanes else {
-            let k = self.k_values[slot].as_mut_slice();
-            let sum: Symmetric = std::array::from_fn(|i| {
-                if first {
-                    lower[i]
-                } else {
-                    k[LOWER[i]] + lower[i]
+        match &mut self.lanes {
+            Some(lanes) => lanes.put_symmetric(slot, lower, first),
+            None => {
+                let k = self.k_values[slot].as_mut_slice();
+                let sum: Symmetric = std::array::from_fn(|i| {
+                    if first {
+                        lower[i]
+                    } else {
+                        k[LOWER[i]] + lower[i]
+                    }
+                });
+                for (e, &i) in SYMMETRIC.iter().enumerate() {
+                    k[e] = sum[i];
                 }
-            });
-            for (e, &i) in SYMMETRIC.iter().enumerate() {
-                k[e] = sum[i];
             }
-            return;
-        };
-        lanes.put_symmetric(slot, lower, first)
+        }
     }
 
     /// K's block at `slot` as last set (until a factorization overwrites it).
@@ -232,7 +233,7 @@ impl Pattern {
 }
 
 impl BlockLdl {
-    /// Index into `k_values` of the lower block `(row, col)`, `row ≥ col`.
+    /// The slot of the lower block `(row, col)`, `row ≥ col`.
     pub fn k_index(&self, row: usize, col: usize) -> Option<usize> {
         self.pattern.slot(row, col)
     }

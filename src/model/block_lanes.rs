@@ -15,10 +15,11 @@ use super::block_cholesky::{BlockLdl, Pattern, Symmetric, LOWER, SYMMETRIC};
 /// Parts per group.
 const LANES: usize = 4;
 
-/// The most memory the lanes' copy of the factor may take. Beyond it (about 4,000 tower
-/// bars) the 4-wide copy streams from L3 or memory and costs more than the lanes save
-/// (`bench`, tower vs the scalar factor: 0.93× the time per step at 2,100 bars, 1.04× at
-/// 6,000, 1.27× at 60,000), so larger systems keep the scalar factor.
+/// The most memory the lanes' K and factor may take. Beyond it (about 4,000 tower bars)
+/// the 4-wide arrays stream from L3 or memory and cost more than the lanes save (`bench`,
+/// tower vs the scalar factor: 0.93× the time per step at 2,100 bars, 1.04× at 6,000,
+/// 1.27× at 60,000, measured when the lanes gathered a copy of the scalar K), so larger
+/// systems keep the scalar factor.
 const MAX_BYTES: usize = 2 << 20;
 type Lanes = [f64; LANES];
 /// One 3 × 3 block per lane, entry (i, j) at `3 j + i` (nalgebra's order).
@@ -117,6 +118,9 @@ impl LaneGroups {
                 lanes.add_group(chol, &parts, pattern.clone())?;
             }
         }
+        // Every component is in a group, and its fill is its share of K's: every slot has
+        // its place in the lanes.
+        debug_assert!(!lanes.lane_of.contains(&usize::MAX));
         Some(lanes)
     }
 
