@@ -172,10 +172,7 @@ mod tests {
     fn the_avx2_correction_gives_the_portable_bits() {
         let model = Model::new(&builtin("tower20").unwrap()).unwrap();
         let coords = &model.coords;
-        let mut q = vec![0.0; 3 * coords.r];
-        for e in 0..coords.n_ends() {
-            coords.scatter(e, &model.positions[coords.end_node[e]], &mut q);
-        }
+        let mut q = model.reduced_positions();
         let wave = |i: usize, f: f64| 1e-3 * (i as f64 * f).sin();
         q.iter_mut()
             .enumerate()

@@ -97,33 +97,39 @@ impl Quantity {
 /// state, as the evaluation's kinematics computes it: the same arithmetic, so the same bits
 /// (one axis only: an importer reads them one by one).
 fn node_from_state(sim: &Simulation, n: usize, axis: usize, position: bool) -> f64 {
-    let model = sim.model();
-    match model.coords.node_end[n] {
-        Some(e) => {
-            let y = &sim.state().y;
-            let (positions, velocities) = y.split_at(y.len() / 2);
-            let eta = if position { positions } else { velocities };
-            model.coords.end_component(e, eta, position, axis)
-        }
-        None if position => model.positions[n][axis],
-        None => 0.0,
+    match node_source(sim, n, position) {
+        Ok((e, eta)) => sim.model().coords.end_component(e, eta, position, axis),
+        Err(fixed) => fixed[axis],
     }
 }
 
 /// The position (with `position`) or velocity of node `n` from the state, through the
 /// kinematics' own [`Coordinates::end_vector`](crate::model::coords::Coordinates::end_vector).
 fn node_vector_from_state(sim: &Simulation, n: usize, position: bool) -> Vector3<f64> {
+    match node_source(sim, n, position) {
+        Ok((e, eta)) => sim.model().coords.end_vector(e, eta, position),
+        Err(fixed) => fixed,
+    }
+}
+
+/// Where node `n`'s position (with `position`) or velocity comes from: the end standing for
+/// it and the state's positions or velocities, or, for a bar-less node, which is pinned and
+/// stays where it starts, the value itself.
+#[inline]
+fn node_source(
+    sim: &Simulation,
+    n: usize,
+    position: bool,
+) -> Result<(usize, &[f64]), Vector3<f64>> {
     let model = sim.model();
     match model.coords.node_end[n] {
         Some(e) => {
             let y = &sim.state().y;
             let (positions, velocities) = y.split_at(y.len() / 2);
-            let eta = if position { positions } else { velocities };
-            model.coords.end_vector(e, eta, position)
+            Ok((e, if position { positions } else { velocities }))
         }
-        // A bar-less node is pinned: it stays where it starts.
-        None if position => model.positions[n],
-        None => Vector3::zeros(),
+        None if position => Err(model.positions[n]),
+        None => Err(Vector3::zeros()),
     }
 }
 

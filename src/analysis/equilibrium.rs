@@ -42,14 +42,9 @@ pub fn settle(model: &mut Model) -> Result<(), SceneError> {
     Ok(())
 }
 
-/// The reduced positions of the model's node positions.
+/// The reduced positions of the model's node positions ([`Model::reduced_positions`]).
 pub fn reduced_positions(model: &Model) -> Vec<f64> {
-    let coords = &model.coords;
-    let mut q = vec![0.0; 3 * coords.r];
-    for e in 0..coords.n_ends() {
-        coords.scatter(e, &model.positions[coords.end_node[e]], &mut q);
-    }
-    q
+    model.reduced_positions()
 }
 
 /// Newton's method from the model's positions.

@@ -113,7 +113,7 @@ impl Workspace {
 /// Computes `η̈₂` (flat, length 3r) at time `t` for reduced positions `q` and velocities `v`.
 ///
 /// Every stage is compiled twice: for baseline x86-64 and, used where the processor has
-/// it, for AVX2 (wider registers and three-operand instructions; 13% fewer instructions on
+/// it, for AVX2 (wider registers and three-operand instructions; 7% fewer instructions on
 /// tower20). Neither fuses a multiply with an add, so both give the same bits.
 pub fn accelerations(
     model: &Model,

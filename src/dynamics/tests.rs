@@ -3,16 +3,6 @@
 use super::*;
 use crate::scene::builtin;
 
-/// The reduced positions of the model's start geometry.
-fn start_positions(model: &Model) -> Vec<f64> {
-    let coords = &model.coords;
-    let mut q = vec![0.0; 3 * coords.r];
-    for e in 0..coords.n_ends() {
-        coords.scatter(e, &model.positions[coords.end_node[e]], &mut q);
-    }
-    q
-}
-
 /// The `k`-th state of a sequence away from rest: `q0` moved by up to 1 cm, velocities
 /// up to 0.1 m/s.
 fn moved(q0: &[f64], k: usize) -> (Vec<f64>, Vec<f64>) {
@@ -34,7 +24,7 @@ fn side_by_side_chains_give_the_same_accelerations() {
     let mut reference = model.clone();
     reference.reactions = reference.reactions.without_lanes();
     assert!(model.reactions.side_by_side() && !reference.reactions.side_by_side());
-    let q0 = start_positions(&model);
+    let q0 = model.reduced_positions();
     let inputs = Inputs::start(&model);
     let (mut ws, mut ws_ref) = (Workspace::new(&model), Workspace::new(&reference));
     let (mut acc, mut acc_ref) = (vec![0.0; q0.len()], vec![0.0; q0.len()]);
@@ -106,7 +96,7 @@ fn a_failed_factor_in_an_evaluation_falls_back_on_k_as_assembled() {
         let mut sparse = dense.clone();
         sparse.reactions = Reactions::new(&sparse.coords, &sparse.inertia, false);
         assert_eq!(sparse.reactions.side_by_side(), copies == 2);
-        let q = start_positions(&dense);
+        let q = dense.reduced_positions();
         // Moving ends (the bars' |ḃ|² terms), so that Ω is not zero as in a free fall.
         let v: Vec<f64> = (0..q.len()).map(|i| (i as f64 * 0.71).sin()).collect();
         let inputs = Inputs::start(&dense);
@@ -178,7 +168,7 @@ fn the_avx2_evaluation_gives_the_portable_bits() {
     );
     assert_eq!(models[3].scene.loads.len(), 1, "a scripted load");
     for model in &models {
-        let q0 = start_positions(model);
+        let q0 = model.reduced_positions();
         let mut inputs = Inputs::start(model);
         inputs.force_density.iter_mut().for_each(|g| *g += 3.0);
         inputs.rest_length.iter_mut().for_each(|s| *s *= 0.9);

@@ -19,7 +19,7 @@ const SINGULAR: f64 = 1e-12;
 /// (2, 0), (1, 1), (2, 1), (2, 2).
 pub type Symmetric = [f64; 6];
 /// Where each entry of a [`Symmetric`] is in a column-major 3 × 3 block.
-pub(super) const LOWER: [usize; 6] = [0, 1, 2, 4, 5, 8];
+const LOWER: [usize; 6] = [0, 1, 2, 4, 5, 8];
 /// Which entry of a [`Symmetric`] each entry of a column-major 3 × 3 block is.
 pub(super) const SYMMETRIC: [usize; 9] = [0, 1, 2, 1, 3, 4, 2, 4, 5];
 
@@ -121,16 +121,7 @@ impl BlockLdl {
             Some(lanes) => lanes.put_symmetric(slot, lower, first),
             None => {
                 let k = self.k_values[slot].as_mut_slice();
-                let sum: Symmetric = std::array::from_fn(|i| {
-                    if first {
-                        lower[i]
-                    } else {
-                        k[LOWER[i]] + lower[i]
-                    }
-                });
-                for (e, &i) in SYMMETRIC.iter().enumerate() {
-                    k[e] = sum[i];
-                }
+                k.copy_from_slice(&summed(lower, first, |e| k[e]));
             }
         }
     }
@@ -323,6 +314,21 @@ impl BlockLdl {
         }
         m
     }
+}
+
+/// The nine entries (column-major) of a block whose lower triangle is set to `lower`
+/// (`first`) or has `lower` added to it, the block's entry `e` read by `at(e)`: six sums,
+/// each stored twice off the diagonal.
+#[inline(always)]
+pub(super) fn summed(lower: &Symmetric, first: bool, at: impl Fn(usize) -> f64) -> [f64; 9] {
+    let sum: Symmetric = std::array::from_fn(|i| {
+        if first {
+            lower[i]
+        } else {
+            at(LOWER[i]) + lower[i]
+        }
+    });
+    std::array::from_fn(|e| sum[SYMMETRIC[e]])
 }
 
 /// The largest magnitude on a block's diagonal (a NaN there fails its pivot anyway).

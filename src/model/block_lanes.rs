@@ -10,7 +10,7 @@
 
 use nalgebra::Matrix3;
 
-use super::block_cholesky::{BlockLdl, Pattern, Symmetric, LOWER, SYMMETRIC};
+use super::block_cholesky::{summed, BlockLdl, Pattern, Symmetric};
 
 /// Parts per group.
 const LANES: usize = 4;
@@ -173,16 +173,11 @@ impl LaneGroups {
     #[inline(always)]
     pub fn put_symmetric(&mut self, slot: usize, lower: &Symmetric, first: bool) {
         let (at, lane) = self.entries(slot);
-        let sum: Symmetric = std::array::from_fn(|k| {
-            let x = lower[k];
-            if first {
-                x
-            } else {
-                at[LOWER[k]][lane] + x
-            }
-        });
-        for (e, &k) in SYMMETRIC.iter().enumerate() {
-            at[e][lane] = sum[k];
+        for (e, x) in summed(lower, first, |e| at[e][lane])
+            .into_iter()
+            .enumerate()
+        {
+            at[e][lane] = x;
         }
     }
 

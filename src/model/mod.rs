@@ -272,6 +272,16 @@ impl Model {
         self.bars.iter().map(|b| b.length).collect()
     }
 
+    /// The reduced positions `η₂` of the model's node positions.
+    pub fn reduced_positions(&self) -> Vec<f64> {
+        let coords = &self.coords;
+        let mut q = vec![0.0; 3 * coords.r];
+        for e in 0..coords.n_ends() {
+            coords.scatter(e, &self.positions[coords.end_node[e]], &mut q);
+        }
+        q
+    }
+
     /// Mass lumped at bar end `e` for weight and momentum: half the rod plus its payload, kg.
     pub fn end_mass(&self, e: usize) -> f64 {
         self.bars[e / 2].mass / 2.0 + self.payload[e]

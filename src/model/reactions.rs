@@ -372,7 +372,7 @@ mod tests {
     }
 
     /// The tower's three chains of joints (one per strut of a stage) are factored side by
-    /// side while the lanes' copy fits in about an L2 cache (700 stages), not beyond (2,000).
+    /// side while the lanes' K and factor fit in 2 MiB (700 stages), not beyond (2,000).
     #[test]
     fn the_towers_chains_go_side_by_side() {
         for (stages, expected) in [(2, true), (20, true), (700, true), (2000, false)] {
