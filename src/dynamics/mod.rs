@@ -353,15 +353,17 @@ fn pairs_mut(ends: &mut [Vector3<f64>]) -> &mut [[Vector3<f64>; 2]] {
 #[inline(always)]
 fn add_reactions(ws: &mut Workspace) {
     ws.reactions.set_rhs(&ws.end_acc);
-    // After a failed factor, K again from the bar vectors [`bar_response`] kept (the same
-    // arithmetic, so the same K).
-    let bars = &ws.bars;
+    // After a failed factor, K and the right-hand side again from the bar vectors
+    // [`bar_response`] kept and the end accelerations (the same arithmetic, so the same
+    // system).
+    let (bars, end_acc) = (&ws.bars, &ws.end_acc);
     // A static bar's entry is never set, but it has no blocks either: `add_bar` returns.
     let assemble_again = |r: &mut Reactions| {
         r.clear();
         for (i, (bv, _, _)) in bars.iter().enumerate() {
             r.add_bar(i, bv, 1.0 / bv.norm_squared());
         }
+        r.set_rhs(end_acc);
     };
     if !ws.reactions.solve(assemble_again) {
         ws.dense_fallbacks += 1;

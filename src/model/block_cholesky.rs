@@ -229,12 +229,18 @@ impl BlockLdl {
         self.pattern.slot(row, col)
     }
 
-    /// Factors K as put (overwriting it); false if K is not (numerically) positive
-    /// definite, which includes any NaN in it (a NaN reaches a pivot, and fails its test).
+    /// Factors K as put (overwriting it) and solves `K x = b` in place. The forward
+    /// substitution runs inside the factor's sweep, column by column as it is factored, so
+    /// L is streamed twice per solve, not three times (the same operations in the same
+    /// order as a separate forward pass). False if K is not (numerically) positive
+    /// definite, which includes any NaN in it (a NaN reaches a pivot, and fails its test);
+    /// `b` is then overwritten too.
     #[inline(always)]
-    pub fn factor(&mut self) -> bool {
+    pub fn factor_and_solve(&mut self, b: &mut DVector<f64>) -> bool {
+        let (b, _) = b.as_mut_slice().as_chunks_mut::<3>();
+        let b = &mut b[..self.n];
         if let Some(lanes) = &mut self.lanes {
-            return lanes.factor(SINGULAR);
+            return lanes.factor_and_solve(SINGULAR, b);
         }
         let tiny = self.tiny();
         let pattern = &self.pattern;
@@ -253,28 +259,13 @@ impl BlockLdl {
                 return false;
             };
             self.d_inv[k] = d_inv;
-            for p in diagonal + 1..pattern.l_start[k + 1] {
-                self.l_values[p] = mul_symmetric(&self.k_values[p], &d_inv);
-            }
-        }
-        true
-    }
-
-    /// Solves `K x = b` in place with the last successful factor.
-    #[inline(always)]
-    pub fn solve(&mut self, b: &mut DVector<f64>) {
-        let (b, _) = b.as_mut_slice().as_chunks_mut::<3>();
-        let b = &mut b[..self.n];
-        if let Some(lanes) = &mut self.lanes {
-            return lanes.solve(b);
-        }
-        let pattern = &self.pattern;
-        for k in 0..self.n {
+            // b[k] has had every earlier column's update: it is y_k.
             let y = Vector3::from(b[k]);
-            for p in pattern.l_start[k] + 1..pattern.l_start[k + 1] {
+            for p in diagonal + 1..pattern.l_start[k + 1] {
+                let l = mul_symmetric(&self.k_values[p], &d_inv);
+                self.l_values[p] = l;
                 let i = pattern.l_rows[p];
-                let bi = Vector3::from(b[i]) - self.l_values[p] * y;
-                b[i] = bi.into();
+                b[i] = (Vector3::from(b[i]) - l * y).into();
             }
         }
         for k in (0..self.n).rev() {
@@ -284,6 +275,7 @@ impl BlockLdl {
             }
             b[k] = x.into();
         }
+        true
     }
 
     /// Pivots at or below this mean a singular K: [`SINGULAR`] times the largest magnitude
@@ -452,9 +444,8 @@ mod tests {
         ];
         let (mut chol, b) = random_spd(7, &pattern, 12345);
         let dense: DMatrix<f64> = chol.dense();
-        assert!(chol.factor());
         let mut x = b.clone();
-        chol.solve(&mut x);
+        assert!(chol.factor_and_solve(&mut x));
         let expected = dense.cholesky().unwrap().solve(&b);
         assert!((x - expected).amax() < 1e-12);
     }
@@ -468,7 +459,7 @@ mod tests {
             let idx = chol.k_index(r, c).unwrap();
             chol.set(idx, &m);
         }
-        assert!(!chol.factor());
+        assert!(!chol.factor_and_solve(&mut DVector::zeros(6)));
     }
 
     /// Three uncoupled chains with the same pattern, interleaved as the tower's are (column
@@ -495,10 +486,8 @@ mod tests {
             assert!(lanes.has_lanes(), "identical chains go side by side");
             let mut scalar = lanes.clone().without_lanes();
             let dense = lanes.dense();
-            assert!(lanes.factor() && scalar.factor());
             let (mut x, mut y) = (b.clone(), b.clone());
-            lanes.solve(&mut x);
-            scalar.solve(&mut y);
+            assert!(lanes.factor_and_solve(&mut x) && scalar.factor_and_solve(&mut y));
             for (p, q) in x.iter().zip(y.iter()) {
                 assert_eq!(p.to_bits(), q.to_bits());
             }
@@ -525,11 +514,12 @@ mod tests {
             lanes.set(p, &(k * 1e13));
         }
         let mut scalar = lanes.clone().without_lanes();
-        assert!(scalar.factor());
-        assert!(lanes.factor(), "the padding lane failed its pivot test");
         let (mut x, mut y) = (b.clone(), b.clone());
-        lanes.solve(&mut x);
-        scalar.solve(&mut y);
+        assert!(scalar.factor_and_solve(&mut y));
+        assert!(
+            lanes.factor_and_solve(&mut x),
+            "the padding lane failed its pivot test"
+        );
         assert!(x
             .iter()
             .zip(y.iter())
@@ -539,13 +529,13 @@ mod tests {
     /// A singular pivot in one chain fails the factor side by side too.
     #[test]
     fn a_singular_chain_fails_side_by_side() {
-        let (mut chol, _) = three_chains(4);
+        let (mut chol, b) = three_chains(4);
         let idx = chol.k_index(4, 4).unwrap();
         chol.set(idx, &Matrix3::zeros());
         assert!(chol.has_lanes());
         let mut scalar = chol.clone().without_lanes();
-        assert!(!chol.factor());
-        assert!(!scalar.factor());
+        assert!(!chol.factor_and_solve(&mut b.clone()));
+        assert!(!scalar.factor_and_solve(&mut b.clone()));
     }
 
     /// Chains of different patterns stay on the scalar factor.

@@ -216,66 +216,43 @@ impl LaneGroups {
         scale
     }
 
-    /// Factors K as assembled; false if a pivot of any part fails.
-    pub fn factor(&mut self, singular: f64) -> bool {
+    /// Factors K as assembled and solves `K x = b` in place (`b` by original column);
+    /// false if a pivot of any part fails (`b` is then overwritten too).
+    pub fn factor_and_solve(&mut self, singular: f64, b: &mut [[f64; 3]]) -> bool {
         #[cfg(target_arch = "x86_64")]
         if std::arch::is_x86_feature_detected!("avx2") {
             // SAFETY: the processor has AVX2.
-            return unsafe { self.factor_avx2(singular) };
+            return unsafe { self.factor_and_solve_avx2(singular, b) };
         }
-        self.factor_lanes(singular)
-    }
-
-    /// Solves `K x = b` in place (`b` by original column) with the last factor.
-    pub fn solve(&mut self, b: &mut [[f64; 3]]) {
-        #[cfg(target_arch = "x86_64")]
-        if std::arch::is_x86_feature_detected!("avx2") {
-            // SAFETY: the processor has AVX2.
-            return unsafe { self.solve_avx2(b) };
-        }
-        self.solve_lanes(b)
+        self.factor_and_solve_lanes(singular, b)
     }
 
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2")]
-    unsafe fn factor_avx2(&mut self, singular: f64) -> bool {
-        self.factor_lanes(singular)
+    unsafe fn factor_and_solve_avx2(&mut self, singular: f64, b: &mut [[f64; 3]]) -> bool {
+        self.factor_and_solve_lanes(singular, b)
     }
 
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx2")]
-    unsafe fn solve_avx2(&mut self, b: &mut [[f64; 3]]) {
-        self.solve_lanes(b)
-    }
-
-    /// [`Self::factor`] and [`Self::solve`] compiled for baseline x86-64 only (SSE2), as on
-    /// a processor without AVX2.
+    /// [`Self::factor_and_solve`] compiled for baseline x86-64 only (SSE2), as on a
+    /// processor without AVX2.
     #[cfg(test)]
     pub fn factor_and_solve_portable(&mut self, singular: f64, b: &mut [[f64; 3]]) -> bool {
-        let ok = self.factor_lanes(singular);
-        self.solve_lanes(b);
-        ok
+        self.factor_and_solve_lanes(singular, b)
     }
 
-    /// The factor with pivots tested against `singular` times K's largest diagonal entry.
+    /// The factor with pivots tested against `singular` times K's largest diagonal entry,
+    /// and the solve.
     #[inline(always)]
-    fn factor_lanes(&mut self, singular: f64) -> bool {
+    fn factor_and_solve_lanes(&mut self, singular: f64, b: &mut [[f64; 3]]) -> bool {
         let tiny = singular * self.diagonal_amax();
         // A plain loop: `Iterator::all` was compiled out of line, outside the AVX2 caller.
         for group in &mut self.groups {
             let k = &mut self.k[group.k_start..group.k_start + group.l.len()];
-            if !group.factor(k, tiny) {
+            if !group.factor_and_solve(k, tiny, b) {
                 return false;
             }
         }
         true
-    }
-
-    #[inline(always)]
-    fn solve_lanes(&mut self, b: &mut [[f64; 3]]) {
-        for group in &mut self.groups {
-            group.solve(b);
-        }
     }
 }
 
@@ -288,9 +265,19 @@ impl LaneGroup {
         (2 * slots + columns) * size_of::<Block>() + columns * size_of::<[Lanes; 3]>()
     }
 
+    /// The group's factor and solve: its parts' right-hand sides gathered into lanes, the
+    /// forward substitution inside the factor's sweep (as in the scalar factor), the
+    /// backward one, and the solution scattered back.
     #[inline(always)]
-    fn factor(&mut self, k: &mut [Block], tiny: f64) -> bool {
-        let pattern = &self.pattern;
+    fn factor_and_solve(&mut self, k: &mut [Block], tiny: f64, b: &mut [[f64; 3]]) -> bool {
+        for (x, columns) in self.rhs.iter_mut().zip(&self.columns) {
+            for (lane, &c) in columns.iter().enumerate().take(self.used) {
+                for i in 0..3 {
+                    x[i][lane] = b[c][i];
+                }
+            }
+        }
+        let (pattern, rhs) = (&self.pattern, &mut self.rhs);
         for c in 0..self.columns.len() {
             let diagonal = pattern.l_start[c];
             for u in &pattern.updates[pattern.update_start[c]..pattern.update_start[c + 1]] {
@@ -308,28 +295,11 @@ impl LaneGroup {
             if !inverse3(&k[diagonal], tiny, self.used, d_inv) {
                 return false;
             }
+            let y = rhs[c];
             // Indexed: zipping the two slices took 0.4% more instructions (callgrind).
             #[allow(clippy::needless_range_loop)]
             for p in diagonal + 1..pattern.l_start[c + 1] {
                 mul_symmetric(&k[p], d_inv, &mut self.l[p]);
-            }
-        }
-        true
-    }
-
-    #[inline(always)]
-    fn solve(&mut self, b: &mut [[f64; 3]]) {
-        for (x, columns) in self.rhs.iter_mut().zip(&self.columns) {
-            for (lane, &c) in columns.iter().enumerate().take(self.used) {
-                for i in 0..3 {
-                    x[i][lane] = b[c][i];
-                }
-            }
-        }
-        let (pattern, rhs) = (&self.pattern, &mut self.rhs);
-        for k in 0..rhs.len() {
-            let y = rhs[k];
-            for p in pattern.l_start[k] + 1..pattern.l_start[k + 1] {
                 let ly = mul_vector(&self.l[p], &y);
                 let bi = &mut rhs[pattern.l_rows[p]];
                 for i in 0..3 {
@@ -354,6 +324,7 @@ impl LaneGroup {
                 }
             }
         }
+        true
     }
 }
 

@@ -215,7 +215,11 @@ impl Model {
             .map(|b| (positions[b.nodes[1]] - positions[b.nodes[0]]) / b.length)
             .collect();
         reactions.assemble(&units);
-        if !reactions.solve(|r| r.assemble(&units)) {
+        let again = |r: &mut Reactions| {
+            r.assemble(&units);
+            r.rhs.fill(0.0);
+        };
+        if !reactions.solve(again) {
             warnings.push(
                 "the joint reactions are statically indeterminate (bars form a rigid frame); \
                  they use the minimum-norm dense solve, whose cost grows faster than linearly"

@@ -254,25 +254,19 @@ impl Reactions {
 
     /// Solves `K Ω = rhs` in place; returns false when the sparse factor failed and the
     /// dense fallback was used (a statically indeterminate configuration). The factor
-    /// overwrites K, so the fallback calls `assemble_again` to assemble the same K again
-    /// (the caller still has the bar vectors; keeping a copy here would cost every
+    /// overwrites K and, as it solves in the same sweep, the right-hand side, so the
+    /// fallback calls `assemble_again` to assemble the same K and right-hand side again
+    /// (the caller still has what they came from; keeping copies here would cost every
     /// evaluation).
     #[inline(always)]
     pub fn solve(&mut self, assemble_again: impl FnOnce(&mut Self)) -> bool {
         if self.n == 0 {
             return true;
         }
-        let factored = match &mut self.solver {
-            Solver::Sparse(chol) => chol.factor(),
-            Solver::Dense(_) => false,
-        };
-        if factored {
-            if let Solver::Sparse(chol) = &mut self.solver {
-                chol.solve(&mut self.rhs);
+        if let Solver::Sparse(chol) = &mut self.solver {
+            if chol.factor_and_solve(&mut self.rhs) {
+                return true;
             }
-            return true;
-        }
-        if matches!(self.solver, Solver::Sparse(_)) {
             assemble_again(self);
         }
         // A NaN fails a pivot, so only a failed or dense solve scans: non-finite data would
@@ -326,9 +320,9 @@ mod tests {
     use crate::model::Model;
     use crate::scene::Scene;
 
-    /// Ten bars between five nodes are a rigid frame with a self-stress: K is singular, the sparse factorization fails
-    /// (overwriting K) and the dense fallback must still see K as assembled, so its Ω is the
-    /// dense solver's.
+    /// Ten bars between five nodes are a rigid frame with a self-stress: K is singular, the
+    /// sparse factorization fails (overwriting K and the right-hand side) and the dense
+    /// fallback must still see both as assembled, so its Ω is the dense solver's.
     #[test]
     fn a_failed_factorization_falls_back_on_k_as_assembled() {
         let scene = Scene::from_toml_str(
@@ -358,12 +352,17 @@ mod tests {
             .collect();
         let mut sparse = Reactions::new(&model.coords, &model.inertia, false);
         let mut dense = Reactions::new(&model.coords, &model.inertia, true);
+        let rhs = DVector::from_fn(sparse.size(), |i, _| (i as f64 + 1.0).sin());
         for r in [&mut sparse, &mut dense] {
             r.assemble(&units);
-            r.rhs = DVector::from_fn(r.size(), |i, _| (i as f64 + 1.0).sin());
+            r.rhs.copy_from(&rhs);
         }
+        let again = |r: &mut Reactions| {
+            r.assemble(&units);
+            r.rhs.copy_from(&rhs);
+        };
         assert!(
-            !sparse.solve(|r| r.assemble(&units)),
+            !sparse.solve(again),
             "the sparse factorization fails on a rigid frame"
         );
         assert!(dense.solve(|_| unreachable!("a dense K is kept")));
