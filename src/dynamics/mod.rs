@@ -8,14 +8,18 @@
 
 pub mod effects;
 pub mod energy;
+pub mod parallel;
 pub mod supports;
 pub mod tangent;
+
+use std::sync::Arc;
 
 use nalgebra::Vector3;
 
 use crate::model::reactions::Reactions;
 use crate::model::{CableLaw, Model};
 pub use effects::applied_forces;
+use parallel::Halves;
 
 /// Values an importer sets between steps.
 #[derive(Debug, Clone, PartialEq)]
@@ -46,6 +50,10 @@ impl Inputs {
     }
 }
 
+/// What λ needs of a bar besides its end forces: `(b, −|ḃ|², 1/((β − α)|b|²))`, kept from
+/// the first λ pass for the second.
+type BarKept = (Vector3<f64>, f64, f64);
+
 /// Scratch space for one evaluation; allocated once per simulation.
 #[derive(Debug, Clone)]
 pub struct Workspace {
@@ -67,27 +75,38 @@ pub struct Workspace {
     pub lambda: Vec<f64>,
     /// Ground contact force per contact point (`Ground::nodes` order), N.
     pub contact_force: Vec<Vector3<f64>>,
-    /// Per bar, what λ needs besides the end forces: `(b, −|ḃ|², 1/((β − α)|b|²))`, kept
-    /// from the first λ pass for the second (and `b` to assemble K again after a failed
+    /// Per bar, what the second λ pass needs (and `b` to assemble K again after a failed
     /// factor).
-    bars: Vec<(Vector3<f64>, f64, f64)>,
+    bars: Vec<BarKept>,
     reactions: Reactions,
     /// Evaluations where the sparse reaction factor failed and the dense solve was used.
     pub dense_fallbacks: u64,
+    /// The split of each evaluation between two threads, for large structures.
+    halves: Option<Arc<Halves>>,
 }
 
 impl Workspace {
-    /// Ω of constraint column `c` from the last evaluation (zero without reactions), N.
-    pub fn reaction_solution(&self, c: usize) -> Vector3<f64> {
-        let r = &self.reactions.rhs;
-        if r.len() < 3 * c + 3 {
-            return Vector3::zeros();
-        }
-        Vector3::new(r[3 * c], r[3 * c + 1], r[3 * c + 2])
+    /// Whether evaluations run on two threads.
+    pub fn two_threads(&self) -> bool {
+        self.halves.is_some()
     }
 
-    /// Allocates everything an evaluation needs.
+    /// Ω of constraint column `c` from the last evaluation (zero without reactions), N.
+    pub fn reaction_solution(&self, c: usize) -> Vector3<f64> {
+        if self.reactions.size() == 0 {
+            return Vector3::zeros();
+        }
+        self.reactions.solution(c)
+    }
+
+    /// Allocates everything an evaluation needs; from [`parallel::MIN_BARS`] bars on (and
+    /// where the layout allows), evaluations run on two threads.
     pub fn new(model: &Model) -> Self {
+        Self::two_threads_from(model, parallel::MIN_BARS)
+    }
+
+    /// [`Self::new`] with two threads from `min_bars` bars on.
+    pub fn two_threads_from(model: &Model, min_bars: usize) -> Self {
         let ends = model.coords.n_ends();
         let nodes = model.n_nodes();
         Self {
@@ -106,6 +125,7 @@ impl Workspace {
             bars: vec![(Vector3::zeros(), 0.0, 1.0); model.bars.len()],
             reactions: model.reactions.clone(),
             dense_fallbacks: 0,
+            halves: Halves::new(model, min_bars).map(Arc::new),
         }
     }
 }
@@ -124,6 +144,9 @@ pub fn accelerations(
     ws: &mut Workspace,
     acc: &mut [f64],
 ) {
+    if let Some(halves) = ws.halves.clone() {
+        return parallel::evaluate(model, &halves, inputs, t, q, v, ws, acc);
+    }
     #[cfg(target_arch = "x86_64")]
     if std::arch::is_x86_feature_detected!("avx2") {
         // SAFETY: the processor has AVX2.
@@ -199,16 +222,8 @@ fn add_scaled(at: &mut [f64; 3], c: f64, a: &Vector3<f64>) {
 pub fn kinematics(model: &Model, q: &[f64], v: &[f64], ws: &mut Workspace) {
     let coords = &model.coords;
     if let Some(single) = &coords.single {
-        let (q, v) = (q.as_chunks::<3>().0, v.as_chunks::<3>().0);
-        let ends = ws.end_pos.iter_mut().zip(ws.end_vel.iter_mut());
-        for ((term, fixed), (x, xdot)) in single.iter().zip(&coords.fixed).zip(ends) {
-            *x = *fixed;
-            *xdot = Vector3::zeros();
-            if let Some((g, c)) = *term {
-                *x += Vector3::from(q[g]) * c;
-                *xdot += Vector3::from(v[g]) * c;
-            }
-        }
+        let ends = (ws.end_pos.as_mut_slice(), ws.end_vel.as_mut_slice());
+        end_states(single, &coords.fixed, q, v, ends);
     } else {
         for e in 0..coords.n_ends() {
             let mut x = coords.fixed[e];
@@ -221,11 +236,45 @@ pub fn kinematics(model: &Model, q: &[f64], v: &[f64], ws: &mut Workspace) {
             ws.end_vel[e] = xdot;
         }
     }
-    let nodes = ws.node_pos.iter_mut().zip(ws.node_vel.iter_mut());
-    for (end, (x, xdot)) in coords.node_end.iter().zip(nodes) {
+    let ends = (ws.end_pos.as_slice(), ws.end_vel.as_slice());
+    node_states(&coords.node_end, ends, (&mut ws.node_pos, &mut ws.node_vel));
+}
+
+/// Positions and velocities of the ends whose single basis terms and fixed parts are
+/// given (the sparse basis: at most one term per end).
+#[inline(always)]
+fn end_states(
+    single: &[Option<(usize, f64)>],
+    fixed: &[Vector3<f64>],
+    q: &[f64],
+    v: &[f64],
+    (end_pos, end_vel): (&mut [Vector3<f64>], &mut [Vector3<f64>]),
+) {
+    let (q, v) = (q.as_chunks::<3>().0, v.as_chunks::<3>().0);
+    let ends = end_pos.iter_mut().zip(end_vel.iter_mut());
+    for ((term, fixed), (x, xdot)) in single.iter().zip(fixed).zip(ends) {
+        *x = *fixed;
+        *xdot = Vector3::zeros();
+        if let Some((g, c)) = *term {
+            *x += Vector3::from(q[g]) * c;
+            *xdot += Vector3::from(v[g]) * c;
+        }
+    }
+}
+
+/// The positions and velocities of the nodes with an end (given by `node_end`), copied
+/// from the ends'.
+#[inline(always)]
+fn node_states(
+    node_end: &[Option<usize>],
+    (end_pos, end_vel): (&[Vector3<f64>], &[Vector3<f64>]),
+    (node_pos, node_vel): (&mut [Vector3<f64>], &mut [Vector3<f64>]),
+) {
+    let nodes = node_pos.iter_mut().zip(node_vel.iter_mut());
+    for (end, (x, xdot)) in node_end.iter().zip(nodes) {
         if let Some(e) = *end {
-            *x = ws.end_pos[e];
-            *xdot = ws.end_vel[e];
+            *x = end_pos[e];
+            *xdot = end_vel[e];
         }
     }
 }
@@ -309,9 +358,21 @@ pub fn bar_response(model: &Model, ws: &mut Workspace) {
 /// from what [`bar_response`] kept.
 #[inline(always)]
 fn bar_response_again(model: &Model, ws: &mut Workspace) {
-    let out = pairs_mut(&mut ws.end_acc).iter_mut().zip(&mut ws.lambda);
-    let per_bar = model.coords.static_bar.iter().zip(&model.inertia);
-    let inputs = ws.bars.iter().zip(pairs(&ws.end_force));
+    let per_bar = (model.coords.static_bar.as_slice(), model.inertia.as_slice());
+    let given = (ws.bars.as_slice(), pairs(&ws.end_force));
+    second_response(per_bar, given, (pairs_mut(&mut ws.end_acc), &mut ws.lambda));
+}
+
+/// [`bar_response_again`] for a run of bars.
+#[inline(always)]
+fn second_response(
+    (static_bar, inertia): (&[bool], &[crate::model::inertia::BarInertia]),
+    (bars, end_force): (&[BarKept], &[[Vector3<f64>; 2]]),
+    (end_acc, lambda): (&mut [[Vector3<f64>; 2]], &mut [f64]),
+) {
+    let out = end_acc.iter_mut().zip(lambda);
+    let per_bar = static_bar.iter().zip(inertia);
+    let inputs = bars.iter().zip(end_force);
     for (((&fixed, inertia), (cached, f)), (acc, lambda)) in per_bar.zip(inputs).zip(out) {
         if !fixed {
             (*lambda, *acc) = response(inertia, *cached, f);
@@ -325,7 +386,7 @@ fn bar_response_again(model: &Model, ws: &mut Workspace) {
 #[inline(always)]
 fn response(
     inertia: &crate::model::inertia::BarInertia,
-    (bv, minus_bdot2, inv_den): (Vector3<f64>, f64, f64),
+    (bv, minus_bdot2, inv_den): BarKept,
     [fa, fb]: &[Vector3<f64>; 2],
 ) -> (f64, [Vector3<f64>; 2]) {
     let lambda = (minus_bdot2 - bv.dot(&(fa * inertia.alpha + fb * inertia.beta))) * inv_den;
@@ -372,4 +433,4 @@ fn add_reactions(ws: &mut Workspace) {
 }
 
 #[cfg(test)]
-mod tests;
+pub(crate) mod tests;

@@ -5,7 +5,7 @@ use crate::scene::builtin;
 
 /// The `k`-th state of a sequence away from rest: `q0` moved by up to 1 cm, velocities
 /// up to 0.1 m/s.
-fn moved(q0: &[f64], k: usize) -> (Vec<f64>, Vec<f64>) {
+pub(super) fn moved(q0: &[f64], k: usize) -> (Vec<f64>, Vec<f64>) {
     let wave = |i: usize, f: f64| 1e-2 * ((i * 7 + k * 13) as f64 * f).sin();
     let q = q0
         .iter()
@@ -42,7 +42,7 @@ fn side_by_side_chains_give_the_same_accelerations() {
 
 /// A rigid frame: ten bars between five nodes, statically indeterminate, so K is
 /// singular; `copies` of it side by side, 3 m apart.
-fn frames(copies: usize) -> crate::scene::Scene {
+pub(super) fn frames(copies: usize) -> crate::scene::Scene {
     let corners = [
         [0.0, 0.0, 0.0],
         [1.0, 0.0, 0.1],

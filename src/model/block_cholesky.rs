@@ -61,6 +61,107 @@ pub(super) struct Update {
     pub with: usize,
 }
 
+/// The scalar factor's K, L and D⁻¹ as raw pointers, so that two threads can factor and
+/// solve different components of K at once: columns of different components share no
+/// slot, pivot or entry of `b` (see [`BlockLdl::components`]), and a component's columns
+/// read only their own. It borrows the factor exclusively while it lives.
+pub(crate) struct SharedFactor<'a> {
+    k: *mut Matrix3<f64>,
+    l: *mut Matrix3<f64>,
+    d_inv: *mut Matrix3<f64>,
+    pattern: &'a Pattern,
+    _exclusive: std::marker::PhantomData<&'a mut BlockLdl>,
+}
+
+// SAFETY: the callers of its unsafe methods keep their writes disjoint.
+unsafe impl Send for SharedFactor<'_> {}
+unsafe impl Sync for SharedFactor<'_> {}
+
+impl SharedFactor<'_> {
+    /// Sets (`first`) or adds to K's symmetric block at `slot`.
+    ///
+    /// # Safety
+    /// No other thread reads or writes `slot` meanwhile.
+    #[inline(always)]
+    pub unsafe fn put_symmetric(&self, slot: usize, lower: &Symmetric, first: bool) {
+        let k = (*self.k.add(slot)).as_mut_slice();
+        k.copy_from_slice(&summed(lower, first, |e| k[e]));
+    }
+
+    /// The largest magnitude on the diagonals of `columns`' pivot blocks of K as assembled.
+    ///
+    /// # Safety
+    /// No other thread writes these blocks meanwhile.
+    pub unsafe fn diagonal_amax(&self, columns: std::ops::Range<usize>) -> f64 {
+        columns
+            .map(|c| diagonal_amax(&*self.k.add(self.pattern.l_start[c])))
+            .fold(0.0, f64::max)
+    }
+
+    /// Factors `columns` (in order, whole components, after every earlier column of their
+    /// components) and runs the forward substitution of `b` with them, pivots tested
+    /// against `tiny`; false if one fails.
+    ///
+    /// # Safety
+    /// `b` holds K's block columns; no other thread touches these columns' components.
+    #[inline(always)]
+    pub unsafe fn factor_columns(
+        &self,
+        columns: impl Iterator<Item = usize>,
+        tiny: f64,
+        b: *mut [f64; 3],
+    ) -> bool {
+        let pattern = self.pattern;
+        for k in columns {
+            let diagonal = pattern.l_start[k];
+            for u in &pattern.updates[pattern.update_start[k]..pattern.update_start[k + 1]] {
+                let (l, ld) = (&*self.l.add(u.source), *self.k.add(u.with));
+                let target = &mut *self.k.add(u.target);
+                if u.target == diagonal {
+                    // Only the lower triangle of a pivot block is read.
+                    subtract_lower_abt(target, l, &ld);
+                } else {
+                    subtract_abt(target, l, &ld);
+                }
+            }
+            let Some(d_inv) = inverse3(&*self.k.add(diagonal), tiny) else {
+                return false;
+            };
+            *self.d_inv.add(k) = d_inv;
+            // b[k] has had every earlier column's update: it is y_k.
+            let y = Vector3::from(*b.add(k));
+            for p in diagonal + 1..pattern.l_start[k + 1] {
+                let l = mul_symmetric(&*self.k.add(p), &d_inv);
+                *self.l.add(p) = l;
+                let bi = &mut *b.add(pattern.l_rows[p]);
+                *bi = (Vector3::from(*bi) - l * y).into();
+            }
+        }
+        true
+    }
+
+    /// The backward substitution of `b` over `columns` (in reverse order), after
+    /// [`Self::factor_columns`] succeeded on them.
+    ///
+    /// # Safety
+    /// As for [`Self::factor_columns`].
+    #[inline(always)]
+    pub unsafe fn solve_back(
+        &self,
+        columns: impl DoubleEndedIterator<Item = usize>,
+        b: *mut [f64; 3],
+    ) {
+        let pattern = self.pattern;
+        for k in columns.rev() {
+            let mut x = *self.d_inv.add(k) * Vector3::from(*b.add(k));
+            for p in pattern.l_start[k] + 1..pattern.l_start[k + 1] {
+                x -= (*self.l.add(p)).tr_mul(&Vector3::from(*b.add(pattern.l_rows[p])));
+            }
+            *b.add(k) = x.into();
+        }
+    }
+}
+
 impl BlockLdl {
     /// Analyses the pattern of `n` block columns with the given lower blocks `(row, col)`,
     /// `row ≥ col`; every diagonal block is added.
@@ -140,12 +241,6 @@ impl BlockLdl {
         let lanes = self.lanes.as_mut().expect("side by side");
         let (b, _) = b.as_mut_slice().as_chunks_mut::<3>();
         lanes.factor_and_solve_portable(SINGULAR, b)
-    }
-
-    /// Whether identical chains are factored side by side.
-    #[cfg(test)]
-    pub fn has_lanes(&self) -> bool {
-        self.lanes.is_some()
     }
 }
 
@@ -243,39 +338,51 @@ impl BlockLdl {
             return lanes.factor_and_solve(SINGULAR, b);
         }
         let tiny = self.tiny();
-        let pattern = &self.pattern;
-        for k in 0..self.n {
-            let diagonal = pattern.l_start[k];
-            for u in &pattern.updates[pattern.update_start[k]..pattern.update_start[k + 1]] {
-                let (l, ld) = (&self.l_values[u.source], self.k_values[u.with]);
-                if u.target == diagonal {
-                    // Only the lower triangle of a pivot block is read.
-                    subtract_lower_abt(&mut self.k_values[u.target], l, &ld);
-                } else {
-                    subtract_abt(&mut self.k_values[u.target], l, &ld);
-                }
-            }
-            let Some(d_inv) = inverse3(&self.k_values[diagonal], tiny) else {
+        let n = self.n;
+        let shared = self.shared();
+        // SAFETY: one caller, holding `self` and `b` exclusively.
+        unsafe {
+            if !shared.factor_columns(0..n, tiny, b.as_mut_ptr()) {
                 return false;
-            };
-            self.d_inv[k] = d_inv;
-            // b[k] has had every earlier column's update: it is y_k.
-            let y = Vector3::from(b[k]);
-            for p in diagonal + 1..pattern.l_start[k + 1] {
-                let l = mul_symmetric(&self.k_values[p], &d_inv);
-                self.l_values[p] = l;
-                let i = pattern.l_rows[p];
-                b[i] = (Vector3::from(b[i]) - l * y).into();
             }
-        }
-        for k in (0..self.n).rev() {
-            let mut x = self.d_inv[k] * Vector3::from(b[k]);
-            for p in pattern.l_start[k] + 1..pattern.l_start[k + 1] {
-                x -= self.l_values[p].tr_mul(&Vector3::from(b[pattern.l_rows[p]]));
-            }
-            b[k] = x.into();
+            shared.solve_back(0..n, b.as_mut_ptr());
         }
         true
+    }
+
+    /// K's connected components (columns linked by no block, directly or through others),
+    /// each its columns in order: they factor independently of each other.
+    pub fn components(&self) -> Vec<Vec<usize>> {
+        let pattern = &self.pattern;
+        let blocks: Vec<(usize, usize)> = (0..self.n)
+            .flat_map(|c| {
+                let rows = &pattern.l_rows[pattern.l_start[c]..pattern.l_start[c + 1]];
+                rows.iter().map(move |&r| (r, c))
+            })
+            .collect();
+        super::block_lanes::components(self.n, &blocks)
+    }
+
+    /// Whether identical chains are factored side by side (then K lives in the lanes).
+    pub fn has_lanes(&self) -> bool {
+        self.lanes.is_some()
+    }
+
+    /// The scalar factor's arrays for writers on two threads (see [`SharedFactor`]).
+    pub(crate) fn shared(&mut self) -> SharedFactor<'_> {
+        debug_assert!(self.lanes.is_none(), "K is in the lanes");
+        SharedFactor {
+            k: self.k_values.as_mut_ptr(),
+            l: self.l_values.as_mut_ptr(),
+            d_inv: self.d_inv.as_mut_ptr(),
+            pattern: &self.pattern,
+            _exclusive: std::marker::PhantomData,
+        }
+    }
+
+    /// Pivots at or below this mean a singular K, for a largest diagonal magnitude `amax`.
+    pub(crate) fn singular_below(amax: f64) -> f64 {
+        SINGULAR * amax
     }
 
     /// Pivots at or below this mean a singular K: [`SINGULAR`] times the largest magnitude
@@ -286,7 +393,7 @@ impl BlockLdl {
             .iter()
             .map(|&d| diagonal_amax(&self.k_values[d]))
             .fold(0.0, f64::max);
-        SINGULAR * scale
+        Self::singular_below(scale)
     }
 
     /// K as a dense symmetric matrix (for the indeterminate fallback), as put, before a

@@ -411,7 +411,7 @@ fn inverse3(a: &Block, tiny: f64, used: usize, inv: &mut Block) -> bool {
 
 /// The connected components of the block pattern, each its columns in order, ordered by
 /// their first column.
-fn components(n: usize, lower_blocks: &[(usize, usize)]) -> Vec<Vec<usize>> {
+pub(super) fn components(n: usize, lower_blocks: &[(usize, usize)]) -> Vec<Vec<usize>> {
     fn find(root: &mut [usize], mut c: usize) -> usize {
         while root[c] != c {
             root[c] = root[root[c]];

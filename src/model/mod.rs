@@ -1,7 +1,7 @@
 //! The immutable model built once from a validated scene: topology, masses, laws,
 //! the constraint basis, the correction plan and the reaction-system layout.
 
-mod block_cholesky;
+pub(crate) mod block_cholesky;
 mod block_lanes;
 pub mod contact;
 pub mod coords;

@@ -8,7 +8,7 @@
 
 use nalgebra::{DMatrix, DVector, Matrix3, Vector3};
 
-use super::block_cholesky::{BlockLdl, Symmetric, SYMMETRIC};
+use super::block_cholesky::{BlockLdl, SharedFactor, Symmetric, SYMMETRIC};
 use super::coords::Coordinates;
 use super::inertia::BarInertia;
 
@@ -31,6 +31,33 @@ struct Contribution {
     first: bool,
 }
 
+impl Contribution {
+    /// This contribution's block for a bar with `b bᵀ` (lower triangle) and `1/|b|²`. A
+    /// uniform rod: same end (4I − 3uuᵀ)/m, opposite ends (−2I + 3uuᵀ)/m.
+    #[inline(always)]
+    fn block(&self, bb: &Symmetric, inv_l2: f64) -> Symmetric {
+        let s = -self.along * inv_l2;
+        let mut block = bb.map(|x| x * s);
+        for k in [0, 3, 5] {
+            block[k] += self.diagonal;
+        }
+        block
+    }
+}
+
+/// `b bᵀ`'s lower triangle (its upper one is the same products).
+#[inline(always)]
+fn outer_lower(b: &Vector3<f64>) -> Symmetric {
+    [
+        b.x * b.x,
+        b.y * b.x,
+        b.z * b.x,
+        b.y * b.y,
+        b.z * b.y,
+        b.z * b.z,
+    ]
+}
+
 /// How K is stored and solved.
 #[derive(Debug, Clone)]
 enum Solver {
@@ -48,7 +75,8 @@ pub struct Reactions {
     bar_start: Vec<usize>,
     contributions: Vec<Contribution>,
     solver: Solver,
-    /// Right-hand side, then solution Ω (3 per constraint column).
+    /// Right-hand side, then solution Ω (3 per constraint column, in the system's
+    /// numbering: see [`Self::solution`]).
     pub rhs: DVector<f64>,
     /// The constraint columns' `(end, coefficient)` terms, flat, column c at
     /// `term_start[c]..term_start[c + 1]`.
@@ -56,6 +84,8 @@ pub struct Reactions {
     terms: Vec<(usize, f64)>,
     /// Sparse slots no contribution sets (see [`Contribution::first`]).
     unassigned: Vec<usize>,
+    /// Per constraint column of the coordinates, its number in the system.
+    internal: Vec<usize>,
 }
 
 impl Reactions {
@@ -72,6 +102,26 @@ impl Reactions {
                     touching[e / 2].push((c, coef, e % 2));
                 }
             }
+        }
+        // The sparse system numbers its columns component by component (each in its own
+        // order), so that K's components, which factor independently, lie apart in memory:
+        // two threads factor different ones without sharing a cache line (a tower's three
+        // chains are otherwise interleaved). Each component's arithmetic is unchanged.
+        let order: Vec<usize> = if dense {
+            (0..nc).collect()
+        } else {
+            let coupled: Vec<(usize, usize)> = touching
+                .iter()
+                .flat_map(|t| t.windows(2).map(|w| (w[1].0, w[0].0)))
+                .collect();
+            super::block_lanes::components(nc, &coupled).concat()
+        };
+        let mut internal = vec![0; nc];
+        for (p, &c) in order.iter().enumerate() {
+            internal[c] = p;
+        }
+        for term in touching.iter_mut().flatten() {
+            term.0 = internal[term.0];
         }
         // The 3 × 3 blocks are symmetric, so the sparse path keeps the lower ones only.
         let pairs = |t: &Vec<Term>| -> Vec<(Term, Term)> {
@@ -120,8 +170,8 @@ impl Reactions {
         let unassigned = (0..slots).filter(|&p| !assigned[p]).collect();
         let mut term_start = vec![0];
         let mut terms = Vec::new();
-        for col in &coords.constraints {
-            terms.extend_from_slice(&col.terms);
+        for &c in &order {
+            terms.extend_from_slice(&coords.constraints[c].terms);
             term_start.push(terms.len());
         }
         Self {
@@ -133,7 +183,14 @@ impl Reactions {
             term_start,
             terms,
             unassigned,
+            internal,
         }
+    }
+
+    /// Ω of constraint column `c` (in the coordinates' numbering) from the last solve, N.
+    pub fn solution(&self, c: usize) -> Vector3<f64> {
+        let i = 3 * self.internal[c];
+        Vector3::new(self.rhs[i], self.rhs[i + 1], self.rhs[i + 2])
     }
 
     /// The same system with the chains factored one after the other (the reference the
@@ -213,24 +270,8 @@ impl Reactions {
         if start == end {
             return;
         }
-        // b bᵀ's lower triangle (its upper one is the same products).
-        let bb: Symmetric = [
-            b.x * b.x,
-            b.y * b.x,
-            b.z * b.x,
-            b.y * b.y,
-            b.z * b.y,
-            b.z * b.z,
-        ];
-        // A uniform rod: same end (4I − 3uuᵀ)/m, opposite ends (−2I + 3uuᵀ)/m.
-        let block = |c: &Contribution| -> Symmetric {
-            let s = -c.along * inv_l2;
-            let mut block = bb.map(|x| x * s);
-            for k in [0, 3, 5] {
-                block[k] += c.diagonal;
-            }
-            block
-        };
+        let bb = outer_lower(b);
+        let block = |c: &Contribution| c.block(&bb, inv_l2);
         let contributions = &self.contributions[start..end];
         match &mut self.solver {
             Solver::Sparse(chol) => {
@@ -300,6 +341,152 @@ impl Reactions {
             Solver::Dense(values) => values.iter().all(|x| x.is_finite()),
         };
         k && self.rhs.iter().all(|x| x.is_finite())
+    }
+}
+
+/// The sparse system for two threads: K's blocks, its factor and the right-hand side as
+/// raw pointers, each thread writing only what its part of the structure owns (the caller
+/// checks the parts are disjoint when it splits the structure; see
+/// `dynamics::parallel`). It borrows the system exclusively while it lives.
+pub(crate) struct SharedReactions<'a> {
+    factor: SharedFactor<'a>,
+    contributions: &'a [Contribution],
+    bar_start: &'a [usize],
+    term_start: &'a [usize],
+    terms: &'a [(usize, f64)],
+    rhs: *mut [f64; 3],
+}
+
+// SAFETY: the callers of its unsafe methods keep their writes disjoint.
+unsafe impl Send for SharedReactions<'_> {}
+unsafe impl Sync for SharedReactions<'_> {}
+
+impl Reactions {
+    /// The system for two threads, when it is sparse with the scalar factor (not the lanes
+    /// or the dense solve).
+    pub(crate) fn shared(&mut self) -> Option<SharedReactions<'_>> {
+        let Solver::Sparse(chol) = &mut self.solver else {
+            return None;
+        };
+        if chol.has_lanes() {
+            return None;
+        }
+        let (rhs, _) = self.rhs.as_mut_slice().as_chunks_mut::<3>();
+        Some(SharedReactions {
+            factor: chol.shared(),
+            contributions: &self.contributions,
+            bar_start: &self.bar_start,
+            term_start: &self.term_start,
+            terms: &self.terms,
+            rhs: rhs.as_mut_ptr(),
+        })
+    }
+
+    /// The sparse factor, if any.
+    pub(crate) fn sparse(&self) -> Option<&BlockLdl> {
+        match &self.solver {
+            Solver::Sparse(chol) => Some(chol),
+            Solver::Dense(_) => None,
+        }
+    }
+
+    /// Bar `bar`'s contributions to K: indices for [`Self::contribution_slot`].
+    pub(crate) fn contributions_of(&self, bar: usize) -> std::ops::Range<usize> {
+        self.bar_start[bar]..self.bar_start[bar + 1]
+    }
+
+    /// The sparse slot contribution `i` goes to.
+    pub(crate) fn contribution_slot(&self, i: usize) -> usize {
+        self.contributions[i].slot
+    }
+
+    /// Constraint column `c`'s `(end, coefficient)` terms.
+    pub(crate) fn column_terms(&self, c: usize) -> &[(usize, f64)] {
+        &self.terms[self.term_start[c]..self.term_start[c + 1]]
+    }
+}
+
+impl SharedReactions<'_> {
+    /// Adds bar `bar`'s contributions to K for its vector `b` and `1/|b|²`, those with
+    /// `skip(i)` false (`i` the contribution's index), in order.
+    ///
+    /// # Safety
+    /// No other thread touches the slots these contributions go to meanwhile.
+    #[inline(always)]
+    pub unsafe fn add_bar(
+        &self,
+        bar: usize,
+        b: &Vector3<f64>,
+        inv_l2: f64,
+        skip: impl Fn(usize) -> bool,
+    ) {
+        let (start, end) = (self.bar_start[bar], self.bar_start[bar + 1]);
+        if start == end {
+            return;
+        }
+        let bb = outer_lower(b);
+        for i in start..end {
+            if !skip(i) {
+                let c = &self.contributions[i];
+                self.factor
+                    .put_symmetric(c.slot, &c.block(&bb, inv_l2), c.first);
+            }
+        }
+    }
+
+    /// Sets the right-hand side of `columns` to `−N̈ P` for the end accelerations without
+    /// reactions, as [`Reactions::set_rhs`] does.
+    ///
+    /// # Safety
+    /// No other thread touches these entries of the right-hand side meanwhile.
+    #[inline(always)]
+    pub unsafe fn set_rhs(&self, columns: std::ops::Range<usize>, end_acc: &[Vector3<f64>]) {
+        for c in columns {
+            let mut sum = Vector3::zeros();
+            for &(e, coef) in &self.terms[self.term_start[c]..self.term_start[c + 1]] {
+                sum += end_acc[e] * coef;
+            }
+            *self.rhs.add(c) = [-sum.x, -sum.y, -sum.z];
+        }
+    }
+
+    /// The largest magnitude on the diagonals of `columns`' pivot blocks of K.
+    ///
+    /// # Safety
+    /// No other thread writes K meanwhile.
+    pub unsafe fn diagonal_amax(&self, columns: std::ops::Range<usize>) -> f64 {
+        self.factor.diagonal_amax(columns)
+    }
+
+    /// Factors `columns` (whole components, in order) and solves for their Ω; false if a
+    /// pivot fails.
+    ///
+    /// # Safety
+    /// No other thread touches these columns' components meanwhile.
+    #[inline(always)]
+    pub unsafe fn factor_and_solve(&self, columns: &[usize], tiny: f64) -> bool {
+        let ok = self
+            .factor
+            .factor_columns(columns.iter().copied(), tiny, self.rhs);
+        if ok {
+            self.factor.solve_back(columns.iter().copied(), self.rhs);
+        }
+        ok
+    }
+
+    /// Adds the solved reactions of `columns` to the end forces, as [`Reactions::add_to`]
+    /// does.
+    ///
+    /// # Safety
+    /// No other thread touches these columns' ends meanwhile.
+    #[inline(always)]
+    pub unsafe fn add_to(&self, columns: std::ops::Range<usize>, end_force: *mut Vector3<f64>) {
+        for c in columns {
+            let o = Vector3::from(*self.rhs.add(c));
+            for &(e, coef) in &self.terms[self.term_start[c]..self.term_start[c + 1]] {
+                *end_force.add(e) += o * coef;
+            }
+        }
     }
 }
 

@@ -1,0 +1,128 @@
+//! The evaluation on two threads gives the one-thread bits.
+
+use super::super::tests::moved;
+use super::super::{accelerations, Inputs, Workspace};
+use super::Halves;
+use crate::model::reactions::Reactions;
+use crate::model::Model;
+use crate::scene::builtin;
+
+/// Evaluates `model` on one thread and on two at states away from rest and compares every
+/// output bit for bit; returns the two-thread split.
+fn same_bits_on_two_threads(model: &Model, inputs: &Inputs) -> Halves {
+    let halves = Halves::new(model, 2).expect("a layout two threads can share");
+    let (mut one, mut two) = (
+        Workspace::two_threads_from(model, usize::MAX),
+        Workspace::two_threads_from(model, 2),
+    );
+    assert!(!one.two_threads() && two.two_threads());
+    let q0 = model.reduced_positions();
+    let (mut acc_one, mut acc_two) = (vec![0.0; q0.len()], vec![f64::NAN; q0.len()]);
+    let name = &model.scene.name;
+    for k in 0..6 {
+        let (q, v) = moved(&q0, k);
+        accelerations(model, inputs, 0.1, &q, &v, &mut one, &mut acc_one);
+        accelerations(model, inputs, 0.1, &q, &v, &mut two, &mut acc_two);
+        assert!(
+            acc_one.iter().any(|a| a.abs() > 1e-3),
+            "a state away from rest"
+        );
+        let bits = |x: &[f64]| x.iter().map(|a| a.to_bits()).collect::<Vec<_>>();
+        assert_eq!(bits(&acc_one), bits(&acc_two), "{name}: accelerations");
+        assert_eq!(bits(&one.gamma), bits(&two.gamma), "{name}: γ");
+        assert_eq!(bits(&one.lambda), bits(&two.lambda), "{name}: λ");
+        assert_eq!(one.end_force, two.end_force, "{name}: end forces with Ω");
+        assert_eq!(one.contact_force, two.contact_force, "{name}: contacts");
+        assert_eq!(one.dense_fallbacks, two.dense_fallbacks, "{name}");
+    }
+    halves
+}
+
+/// A 30-stage tower (its chains factored one after the other, as beyond the lanes' size)
+/// with elastic cables, force inputs and a scripted load: the seam between the halves
+/// crosses K's blocks and the reduced nodes the two halves' bars share, and each thread
+/// factors whole chains.
+#[test]
+fn a_tower_gives_the_same_bits_on_two_threads() {
+    let mut scene = crate::scene::tower_scene(30, Some(500.0), "tower");
+    scene.prestress = None;
+    for (j, c) in scene.cables.iter_mut().enumerate() {
+        c.rest_length = Some(0.4 + 0.01 * (j % 7) as f64);
+    }
+    let mut model = Model::new(&scene).unwrap();
+    model.reactions = model.reactions.without_lanes();
+    let mut inputs = Inputs::start(&model);
+    for (k, f) in inputs.node_force.iter_mut().enumerate() {
+        f.x = 0.5 + k as f64;
+    }
+    let halves = same_bits_on_two_threads(&model, &inputs);
+    assert!(!halves.deferred_bars.is_empty(), "K's blocks at the seam");
+    assert!(!halves.late_ends.is_empty(), "nodes at the seam");
+    assert_eq!(
+        halves.columns.map(|c| c.len()),
+        [60, 30],
+        "two chains and one"
+    );
+}
+
+/// Every other kind of effect: controlled cables (prism2), a reeled cable and a scripted
+/// load (prism2-elastic), damped cables, payloads, gravity and ground contact
+/// (icosahedron-dropped, pressed into its ground, applied after both halves).
+#[test]
+fn every_effect_gives_the_same_bits_on_two_threads() {
+    let mut reeled = crate::scene::Scene::from_toml_str(
+        &(builtin("prism2-elastic").unwrap().to_toml_string()
+            + "\n[[loads]]\nkind = \"sinusoidal\"\nnode = 7\namplitude = [1.0, 0.0, 0.0]\n\
+               frequency = 2.0\nphase = 0.5\n"),
+    )
+    .unwrap();
+    reeled.cables[9].control = Some(crate::scene::CableControl::RestLength);
+    let mut dropped = crate::scene::Scene::from_toml_str(include_str!(
+        "../../../fmu/scenes/icosahedron-dropped.toml"
+    ))
+    .unwrap();
+    dropped.nodes.iter_mut().for_each(|x| x[2] -= 0.305);
+    for scene in [builtin("prism2").unwrap(), reeled, dropped] {
+        let mut model = Model::new(&scene).unwrap();
+        // Side by side the chains keep one thread.
+        model.reactions = model.reactions.without_lanes();
+        let mut inputs = Inputs::start(&model);
+        inputs.force_density.iter_mut().for_each(|g| *g += 3.0);
+        inputs.rest_length.iter_mut().for_each(|s| *s *= 0.9);
+        same_bits_on_two_threads(&model, &inputs);
+    }
+}
+
+/// Rigid frames (K singular) with the sparse solver forced on them: the factor fails on a
+/// thread, and the evaluation falls back on the dense solve of K assembled again.
+#[test]
+fn a_failed_factor_on_two_threads_falls_back_as_on_one() {
+    let mut model = Model::new(&super::super::tests::frames(3)).unwrap();
+    model.reactions = Reactions::new(&model.coords, &model.inertia, false).without_lanes();
+    let halves = same_bits_on_two_threads(&model, &Inputs::start(&model));
+    assert!(halves.columns.iter().all(|c| !c.is_empty()));
+    let mut ws = Workspace::two_threads_from(&model, 2);
+    let q = model.reduced_positions();
+    let mut acc = vec![0.0; q.len()];
+    accelerations(
+        &model,
+        &Inputs::start(&model),
+        0.0,
+        &q,
+        &q,
+        &mut ws,
+        &mut acc,
+    );
+    assert_eq!(ws.dense_fallbacks, 1, "the sparse factor fails");
+}
+
+/// The dense basis and the side-by-side chains keep one thread.
+#[test]
+fn layouts_two_threads_cannot_share_keep_one() {
+    let prism = builtin("prism2").unwrap();
+    let dense = Model::with_basis(&prism, crate::model::BasisKind::Dense).unwrap();
+    assert!(Halves::new(&dense, 2).is_none());
+    let tower = Model::new(&builtin("tower20").unwrap()).unwrap();
+    assert!(Halves::new(&tower, 2).is_none(), "the lanes hold K");
+    assert!(Halves::new(&Model::new(&prism).unwrap(), usize::MAX).is_none());
+}
