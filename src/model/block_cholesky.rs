@@ -31,10 +31,12 @@ pub struct BlockLdl {
     /// [`Self::put_symmetric`] at [`Self::k_index`]; the scalar factorization overwrites them with
     /// the Schur complement's blocks: `L_ik D_k` below the diagonal, for the updates of
     /// later columns, and `D_k` on it. One array, so an evaluation streams K once (it
-    /// matters for large structures). Empty when the lanes hold K.
+    /// matters for large structures). L itself is not kept: `L_ik = (L_ik D_k) D_k⁻¹` is
+    /// multiplied out where it is used, the same product as when it was stored, so the
+    /// same bits, and 144 B less memory traffic per block column. Empty when the lanes
+    /// hold K.
     k_values: Vec<Matrix3<f64>>,
     pattern: Pattern,
-    l_values: Vec<Matrix3<f64>>,
     /// `D_k⁻¹`, symmetric.
     d_inv: Vec<Matrix3<f64>>,
     /// Identical independent chains factored side by side, when K is made of them.
@@ -48,7 +50,8 @@ pub(super) struct Pattern {
     /// identity, is unused.
     pub l_start: Vec<usize>,
     pub l_rows: Vec<usize>,
-    /// The updates `S[target] −= L[source] (LD[with])ᵀ` of each column, `update_start[k]..`.
+    /// The updates `S[target] −= L[source] (LD[with])ᵀ` of each column, `update_start[k]..`,
+    /// `source` and `with` in the earlier column `column`.
     pub update_start: Vec<usize>,
     pub updates: Vec<Update>,
 }
@@ -59,15 +62,15 @@ pub(super) struct Update {
     pub target: usize,
     pub source: usize,
     pub with: usize,
+    pub column: usize,
 }
 
-/// The scalar factor's K, L and D⁻¹ as raw pointers, so that two threads can factor and
+/// The scalar factor's K and D⁻¹ as raw pointers, so that two threads can factor and
 /// solve different components of K at once: columns of different components share no
 /// slot, pivot or entry of `b` (see [`BlockLdl::components`]), and a component's columns
 /// read only their own. It borrows the factor exclusively while it lives.
 pub(crate) struct SharedFactor<'a> {
     k: *mut Matrix3<f64>,
-    l: *mut Matrix3<f64>,
     d_inv: *mut Matrix3<f64>,
     pattern: &'a Pattern,
     _exclusive: std::marker::PhantomData<&'a mut BlockLdl>,
@@ -88,14 +91,13 @@ impl SharedFactor<'_> {
         k.copy_from_slice(&summed(lower, first, |e| k[e]));
     }
 
-    /// The largest magnitude on the diagonals of `columns`' pivot blocks of K as assembled.
+    /// The largest magnitude on the diagonal of K's block at `slot`.
     ///
     /// # Safety
-    /// No other thread writes these blocks meanwhile.
-    pub unsafe fn diagonal_amax(&self, columns: std::ops::Range<usize>) -> f64 {
-        columns
-            .map(|c| diagonal_amax(&*self.k.add(self.pattern.l_start[c])))
-            .fold(0.0, f64::max)
+    /// No other thread writes `slot` meanwhile.
+    #[inline(always)]
+    pub unsafe fn diagonal_amax_at(&self, slot: usize) -> f64 {
+        diagonal_amax(&*self.k.add(slot))
     }
 
     /// Factors `columns` (in order, whole components, after every earlier column of their
@@ -115,13 +117,14 @@ impl SharedFactor<'_> {
         for k in columns {
             let diagonal = pattern.l_start[k];
             for u in &pattern.updates[pattern.update_start[k]..pattern.update_start[k + 1]] {
-                let (l, ld) = (&*self.l.add(u.source), *self.k.add(u.with));
+                let l = self.l(u.source, u.column);
+                let ld = *self.k.add(u.with);
                 let target = &mut *self.k.add(u.target);
                 if u.target == diagonal {
                     // Only the lower triangle of a pivot block is read.
-                    subtract_lower_abt(target, l, &ld);
+                    subtract_lower_abt(target, &l, &ld);
                 } else {
-                    subtract_abt(target, l, &ld);
+                    subtract_abt(target, &l, &ld);
                 }
             }
             let Some(d_inv) = inverse3(&*self.k.add(diagonal), tiny) else {
@@ -132,7 +135,6 @@ impl SharedFactor<'_> {
             let y = Vector3::from(*b.add(k));
             for p in diagonal + 1..pattern.l_start[k + 1] {
                 let l = mul_symmetric(&*self.k.add(p), &d_inv);
-                *self.l.add(p) = l;
                 let bi = &mut *b.add(pattern.l_rows[p]);
                 *bi = (Vector3::from(*bi) - l * y).into();
             }
@@ -155,10 +157,21 @@ impl SharedFactor<'_> {
         for k in columns.rev() {
             let mut x = *self.d_inv.add(k) * Vector3::from(*b.add(k));
             for p in pattern.l_start[k] + 1..pattern.l_start[k + 1] {
-                x -= (*self.l.add(p)).tr_mul(&Vector3::from(*b.add(pattern.l_rows[p])));
+                let l = self.l(p, k);
+                x -= l.tr_mul(&Vector3::from(*b.add(pattern.l_rows[p])));
             }
             *b.add(k) = x.into();
         }
+    }
+
+    /// `L` at `slot` of the factored column `column`: `(L D) D⁻¹`, multiplied out as when
+    /// the column was factored.
+    ///
+    /// # Safety
+    /// `column` is factored and no other thread writes it.
+    #[inline(always)]
+    unsafe fn l(&self, slot: usize, column: usize) -> Matrix3<f64> {
+        mul_symmetric(&*self.k.add(slot), &*self.d_inv.add(column))
     }
 }
 
@@ -171,7 +184,6 @@ impl BlockLdl {
         let mut chol = Self {
             n,
             k_values: vec![Matrix3::zeros(); slots],
-            l_values: vec![Matrix3::zeros(); slots],
             d_inv: vec![Matrix3::zeros(); n],
             pattern,
             lanes: None,
@@ -180,7 +192,6 @@ impl BlockLdl {
         if chol.lanes.is_some() {
             // The lanes keep their own K and factor.
             chol.k_values = Vec::new();
-            chol.l_values = Vec::new();
             chol.d_inv = Vec::new();
         }
         chol
@@ -191,7 +202,6 @@ impl BlockLdl {
     pub fn without_lanes(mut self) -> Self {
         self.k_values = (0..self.slots()).map(|p| self.block(p)).collect();
         self.lanes = None;
-        self.l_values = vec![Matrix3::zeros(); self.k_values.len()];
         self.d_inv = vec![Matrix3::zeros(); self.n];
         self
     }
@@ -297,6 +307,7 @@ impl Pattern {
                         target: l_slot(row, k),
                         source: p,
                         with: at,
+                        column: j,
                     });
                 }
             }
@@ -330,14 +341,22 @@ impl BlockLdl {
     /// order as a separate forward pass). False if K is not (numerically) positive
     /// definite, which includes any NaN in it (a NaN reaches a pivot, and fails its test);
     /// `b` is then overwritten too.
+    ///
+    /// The scalar factor's singularity threshold is scaled by `amax`, the largest magnitude
+    /// on K's diagonal as assembled, when the caller gathered it (else, NaN, by a pass over
+    /// K); the lanes find theirs.
     #[inline(always)]
-    pub fn factor_and_solve(&mut self, b: &mut DVector<f64>) -> bool {
+    pub fn factor_and_solve(&mut self, b: &mut DVector<f64>, amax: f64) -> bool {
         let (b, _) = b.as_mut_slice().as_chunks_mut::<3>();
         let b = &mut b[..self.n];
         if let Some(lanes) = &mut self.lanes {
             return lanes.factor_and_solve(SINGULAR, b);
         }
-        let tiny = self.tiny();
+        let tiny = Self::singular_below(if amax.is_nan() {
+            self.tiny_scale()
+        } else {
+            amax
+        });
         let n = self.n;
         let shared = self.shared();
         // SAFETY: one caller, holding `self` and `b` exclusively.
@@ -373,7 +392,6 @@ impl BlockLdl {
         debug_assert!(self.lanes.is_none(), "K is in the lanes");
         SharedFactor {
             k: self.k_values.as_mut_ptr(),
-            l: self.l_values.as_mut_ptr(),
             d_inv: self.d_inv.as_mut_ptr(),
             pattern: &self.pattern,
             _exclusive: std::marker::PhantomData,
@@ -385,15 +403,21 @@ impl BlockLdl {
         SINGULAR * amax
     }
 
-    /// Pivots at or below this mean a singular K: [`SINGULAR`] times the largest magnitude
-    /// on K's diagonal as assembled (the lanes find theirs the same way).
+    /// The largest magnitude on K's diagonal as assembled (the lanes find theirs the same
+    /// way).
     #[inline(always)]
-    fn tiny(&self) -> f64 {
+    fn tiny_scale(&self) -> f64 {
         let scale = self.pattern.l_start[..self.n]
             .iter()
             .map(|&d| diagonal_amax(&self.k_values[d]))
             .fold(0.0, f64::max);
-        Self::singular_below(scale)
+        scale
+    }
+
+    /// The largest magnitude on the diagonal of K's block at `slot` (the scalar factor's).
+    #[inline(always)]
+    pub fn diagonal_amax(&self, slot: usize) -> f64 {
+        diagonal_amax(&self.k_values[slot])
     }
 
     /// K as a dense symmetric matrix (for the indeterminate fallback), as put, before a
@@ -552,7 +576,7 @@ mod tests {
         let (mut chol, b) = random_spd(7, &pattern, 12345);
         let dense: DMatrix<f64> = chol.dense();
         let mut x = b.clone();
-        assert!(chol.factor_and_solve(&mut x));
+        assert!(chol.factor_and_solve(&mut x, f64::NAN));
         let expected = dense.cholesky().unwrap().solve(&b);
         assert!((x - expected).amax() < 1e-12);
     }
@@ -566,7 +590,7 @@ mod tests {
             let idx = chol.k_index(r, c).unwrap();
             chol.set(idx, &m);
         }
-        assert!(!chol.factor_and_solve(&mut DVector::zeros(6)));
+        assert!(!chol.factor_and_solve(&mut DVector::zeros(6), f64::NAN));
     }
 
     /// Three uncoupled chains with the same pattern, interleaved as the tower's are (column
@@ -594,7 +618,10 @@ mod tests {
             let mut scalar = lanes.clone().without_lanes();
             let dense = lanes.dense();
             let (mut x, mut y) = (b.clone(), b.clone());
-            assert!(lanes.factor_and_solve(&mut x) && scalar.factor_and_solve(&mut y));
+            assert!(
+                lanes.factor_and_solve(&mut x, f64::NAN)
+                    && scalar.factor_and_solve(&mut y, f64::NAN)
+            );
             for (p, q) in x.iter().zip(y.iter()) {
                 assert_eq!(p.to_bits(), q.to_bits());
             }
@@ -622,9 +649,9 @@ mod tests {
         }
         let mut scalar = lanes.clone().without_lanes();
         let (mut x, mut y) = (b.clone(), b.clone());
-        assert!(scalar.factor_and_solve(&mut y));
+        assert!(scalar.factor_and_solve(&mut y, f64::NAN));
         assert!(
-            lanes.factor_and_solve(&mut x),
+            lanes.factor_and_solve(&mut x, f64::NAN),
             "the padding lane failed its pivot test"
         );
         assert!(x
@@ -641,8 +668,8 @@ mod tests {
         chol.set(idx, &Matrix3::zeros());
         assert!(chol.has_lanes());
         let mut scalar = chol.clone().without_lanes();
-        assert!(!chol.factor_and_solve(&mut b.clone()));
-        assert!(!scalar.factor_and_solve(&mut b.clone()));
+        assert!(!chol.factor_and_solve(&mut b.clone(), f64::NAN));
+        assert!(!scalar.factor_and_solve(&mut b.clone(), f64::NAN));
     }
 
     /// Chains of different patterns stay on the scalar factor.

@@ -29,6 +29,9 @@ struct Contribution {
     /// The first contribution to its sparse slot in assembly order: it sets the block
     /// instead of adding to it, so K needs no zeroing pass.
     first: bool,
+    /// The last contribution to a pivot block in assembly order: the block is then as
+    /// assembled, and its diagonal enters the singularity threshold's scale.
+    closes_pivot: bool,
 }
 
 impl Contribution {
@@ -78,7 +81,8 @@ pub struct Reactions {
     /// Right-hand side, then solution Ω (3 per constraint column, in the system's
     /// numbering: see [`Self::solution`]).
     pub rhs: DVector<f64>,
-    /// The constraint columns' `(end, coefficient)` terms, flat, column c at
+    /// The constraint columns' `(end, coefficient)` terms, flat, column c (in the
+    /// coordinates' numbering, so that the ends are visited in order) at
     /// `term_start[c]..term_start[c + 1]`.
     term_start: Vec<usize>,
     terms: Vec<(usize, f64)>,
@@ -86,6 +90,10 @@ pub struct Reactions {
     unassigned: Vec<usize>,
     /// Per constraint column of the coordinates, its number in the system.
     internal: Vec<usize>,
+    /// The largest magnitude on K's diagonal as assembled, gathered as each pivot block is
+    /// closed when `track_scale` (the scalar factor: no pass over K before it is factored).
+    scale: f64,
+    track_scale: bool,
 }
 
 impl Reactions {
@@ -149,6 +157,7 @@ impl Reactions {
             Solver::Dense(_) => 0,
         };
         let mut assigned = vec![false; slots];
+        let mut closing = vec![None; slots];
         let mut bar_start = vec![0];
         let mut contributions = Vec::new();
         for (bar, t) in touching.iter().enumerate() {
@@ -157,23 +166,31 @@ impl Reactions {
                 let (w, c) = inertia[bar].compliance_scalars(a.2, b.2);
                 let slot = slot(a.0, b.0);
                 let first = !dense && !std::mem::replace(&mut assigned[slot], true);
+                if !dense && a.0 == b.0 {
+                    closing[slot] = Some(contributions.len());
+                }
                 contributions.push(Contribution {
                     slot,
                     diagonal: w * coef,
                     along: c * coef,
                     first,
+                    closes_pivot: false,
                 });
             }
             bar_start.push(contributions.len());
+        }
+        for &i in closing.iter().flatten() {
+            contributions[i].closes_pivot = true;
         }
         // Fill-in, and blocks of columns no moving bar touches: zeroed before each assembly.
         let unassigned = (0..slots).filter(|&p| !assigned[p]).collect();
         let mut term_start = vec![0];
         let mut terms = Vec::new();
-        for &c in &order {
-            terms.extend_from_slice(&coords.constraints[c].terms);
+        for col in &coords.constraints {
+            terms.extend_from_slice(&col.terms);
             term_start.push(terms.len());
         }
+        let track_scale = matches!(&solver, Solver::Sparse(chol) if !chol.has_lanes());
         Self {
             n,
             bar_start,
@@ -184,6 +201,8 @@ impl Reactions {
             terms,
             unassigned,
             internal,
+            scale: 0.0,
+            track_scale,
         }
     }
 
@@ -199,6 +218,7 @@ impl Reactions {
     pub(crate) fn without_lanes(mut self) -> Self {
         if let Solver::Sparse(chol) = self.solver {
             self.solver = Solver::Sparse(Box::new(chol.without_lanes()));
+            self.track_scale = true;
         }
         self
     }
@@ -227,12 +247,12 @@ impl Reactions {
     #[inline(always)]
     pub fn set_rhs(&mut self, end_acc: &[Vector3<f64>]) {
         let (rhs, _) = self.rhs.as_mut_slice().as_chunks_mut::<3>();
-        for (r, span) in rhs.iter_mut().zip(self.term_start.windows(2)) {
+        for (&i, span) in self.internal.iter().zip(self.term_start.windows(2)) {
             let mut sum = Vector3::zeros();
             for &(e, coef) in &self.terms[span[0]..span[1]] {
                 sum += end_acc[e] * coef;
             }
-            *r = [-sum.x, -sum.y, -sum.z];
+            rhs[i] = [-sum.x, -sum.y, -sum.z];
         }
     }
 
@@ -240,8 +260,8 @@ impl Reactions {
     #[inline(always)]
     pub fn add_to(&self, end_force: &mut [Vector3<f64>]) {
         let (omega, _) = self.rhs.as_slice().as_chunks::<3>();
-        for (o, span) in omega.iter().zip(self.term_start.windows(2)) {
-            let o = Vector3::from(*o);
+        for (&i, span) in self.internal.iter().zip(self.term_start.windows(2)) {
+            let o = Vector3::from(omega[i]);
             for &(e, coef) in &self.terms[span[0]..span[1]] {
                 end_force[e] += o * coef;
             }
@@ -252,6 +272,7 @@ impl Reactions {
     /// no bar sets).
     #[inline(always)]
     pub fn clear(&mut self) {
+        self.scale = 0.0;
         match &mut self.solver {
             Solver::Sparse(chol) => {
                 for &p in &self.unassigned {
@@ -277,6 +298,9 @@ impl Reactions {
             Solver::Sparse(chol) => {
                 for c in contributions {
                     chol.put_symmetric(c.slot, &block(c), c.first);
+                    if self.track_scale && c.closes_pivot {
+                        self.scale = self.scale.max(chol.diagonal_amax(c.slot));
+                    }
                 }
             }
             Solver::Dense(values) => {
@@ -305,7 +329,12 @@ impl Reactions {
             return true;
         }
         if let Solver::Sparse(chol) = &mut self.solver {
-            if chol.factor_and_solve(&mut self.rhs) {
+            let amax = if self.track_scale {
+                self.scale
+            } else {
+                f64::NAN
+            };
+            if chol.factor_and_solve(&mut self.rhs, amax) {
                 return true;
             }
             assemble_again(self);
@@ -354,6 +383,7 @@ pub(crate) struct SharedReactions<'a> {
     bar_start: &'a [usize],
     term_start: &'a [usize],
     terms: &'a [(usize, f64)],
+    internal: &'a [usize],
     rhs: *mut [f64; 3],
 }
 
@@ -378,6 +408,7 @@ impl Reactions {
             bar_start: &self.bar_start,
             term_start: &self.term_start,
             terms: &self.terms,
+            internal: &self.internal,
             rhs: rhs.as_mut_ptr(),
         })
     }
@@ -400,7 +431,7 @@ impl Reactions {
         self.contributions[i].slot
     }
 
-    /// Constraint column `c`'s `(end, coefficient)` terms.
+    /// Constraint column `c`'s `(end, coefficient)` terms (the coordinates' numbering).
     pub(crate) fn column_terms(&self, c: usize) -> &[(usize, f64)] {
         &self.terms[self.term_start[c]..self.term_start[c + 1]]
     }
@@ -408,7 +439,8 @@ impl Reactions {
 
 impl SharedReactions<'_> {
     /// Adds bar `bar`'s contributions to K for its vector `b` and `1/|b|²`, those with
-    /// `skip(i)` false (`i` the contribution's index), in order.
+    /// `skip(i)` false (`i` the contribution's index), in order; returns the largest
+    /// magnitude on the diagonals of the pivot blocks it closed (0 if none).
     ///
     /// # Safety
     /// No other thread touches the slots these contributions go to meanwhile.
@@ -419,19 +451,21 @@ impl SharedReactions<'_> {
         b: &Vector3<f64>,
         inv_l2: f64,
         skip: impl Fn(usize) -> bool,
-    ) {
+    ) -> f64 {
         let (start, end) = (self.bar_start[bar], self.bar_start[bar + 1]);
-        if start == end {
-            return;
-        }
         let bb = outer_lower(b);
+        let mut amax: f64 = 0.0;
         for i in start..end {
             if !skip(i) {
                 let c = &self.contributions[i];
                 self.factor
                     .put_symmetric(c.slot, &c.block(&bb, inv_l2), c.first);
+                if c.closes_pivot {
+                    amax = amax.max(self.factor.diagonal_amax_at(c.slot));
+                }
             }
         }
+        amax
     }
 
     /// Sets the right-hand side of `columns` to `−N̈ P` for the end accelerations without
@@ -446,20 +480,12 @@ impl SharedReactions<'_> {
             for &(e, coef) in &self.terms[self.term_start[c]..self.term_start[c + 1]] {
                 sum += end_acc[e] * coef;
             }
-            *self.rhs.add(c) = [-sum.x, -sum.y, -sum.z];
+            *self.rhs.add(self.internal[c]) = [-sum.x, -sum.y, -sum.z];
         }
     }
 
-    /// The largest magnitude on the diagonals of `columns`' pivot blocks of K.
-    ///
-    /// # Safety
-    /// No other thread writes K meanwhile.
-    pub unsafe fn diagonal_amax(&self, columns: std::ops::Range<usize>) -> f64 {
-        self.factor.diagonal_amax(columns)
-    }
-
-    /// Factors `columns` (whole components, in order) and solves for their Ω; false if a
-    /// pivot fails.
+    /// Factors `columns` (whole components, in order) and solves for their Ω, pivots
+    /// tested against `tiny`; false if one fails.
     ///
     /// # Safety
     /// No other thread touches these columns' components meanwhile.
@@ -482,7 +508,7 @@ impl SharedReactions<'_> {
     #[inline(always)]
     pub unsafe fn add_to(&self, columns: std::ops::Range<usize>, end_force: *mut Vector3<f64>) {
         for c in columns {
-            let o = Vector3::from(*self.rhs.add(c));
+            let o = Vector3::from(*self.rhs.add(self.internal[c]));
             for &(e, coef) in &self.terms[self.term_start[c]..self.term_start[c + 1]] {
                 *end_force.add(e) += o * coef;
             }

@@ -24,7 +24,7 @@ use crate::model::Model;
 
 /// Structures from this many bars up evaluate on two threads (`bench`, measured side by
 /// side: see the README's performance section).
-pub const MIN_BARS: usize = 10_000;
+pub const MIN_BARS: usize = 4_000;
 
 /// A cable whose force density the other thread records.
 const OTHER: usize = usize::MAX;
@@ -356,6 +356,7 @@ pub(super) fn evaluate(
         }
         let with_reactions = !model.pipeline.constraints.is_empty();
         // Stage 3: λ, the end accelerations and K.
+        let mut scale: f64;
         {
             if with_reactions {
                 ws.reactions.clear();
@@ -384,31 +385,40 @@ pub(super) fn evaluate(
             };
             let shared = &shared;
             let deferred = &halves.deferred;
-            join(
+            // Each part also gathers the largest diagonal magnitude of the pivot blocks it
+            // closes: the scale of the singularity threshold.
+            let (amax0, amax1) = join(
                 || {
+                    let mut amax: f64 = 0.0;
                     first_response(model, given(0..b), (acc0, l0, k0), |i, bv, l2| {
                         if let Some(r) = shared {
                             // SAFETY: the first half's blocks; the second half's terms
                             // on them wait (`deferred`).
-                            unsafe { r.add_bar(i, bv, l2, |_| false) }
+                            amax = amax.max(unsafe { r.add_bar(i, bv, l2, |_| false) });
                         }
-                    })
+                    });
+                    amax
                 },
                 || {
+                    let mut amax: f64 = 0.0;
                     let n = model.bars.len();
                     first_response(model, given(b..n), (acc1, l1, k1), |i, bv, l2| {
                         if let Some(r) = shared {
                             // SAFETY: the second half's own blocks.
-                            unsafe { r.add_bar(i, bv, l2, |c| deferred[c]) }
+                            amax = amax.max(unsafe { r.add_bar(i, bv, l2, |c| deferred[c]) });
                         }
-                    })
+                    });
+                    amax
                 },
             );
+            scale = amax0.max(amax1);
             if let Some(r) = shared {
                 for &i in &halves.deferred_bars {
                     let bv = bars[i].0;
                     // SAFETY: both halves are done; one thread.
-                    unsafe { r.add_bar(i, &bv, 1.0 / bv.norm_squared(), |c| !deferred[c]) }
+                    let closed =
+                        unsafe { r.add_bar(i, &bv, 1.0 / bv.norm_squared(), |c| !deferred[c]) };
+                    scale = scale.max(closed);
                 }
             }
         }
@@ -419,17 +429,10 @@ pub(super) fn evaluate(
                 let end_acc = ws.end_acc.as_slice();
                 let shared = ws.reactions.shared().expect("the scalar factor");
                 let halves_of = |side: usize| [0..halves.even, halves.even..n][side].clone();
-                let rhs_and_amax = |side: usize| {
-                    let columns = halves_of(side);
-                    // SAFETY: each thread sets the right-hand side of its own columns, and
-                    // nothing writes K meanwhile.
-                    unsafe {
-                        shared.set_rhs(columns.clone(), end_acc);
-                        shared.diagonal_amax(columns)
-                    }
-                };
-                let (m0, m1) = join(|| rhs_and_amax(0), || rhs_and_amax(1));
-                let tiny = BlockLdl::singular_below(m0.max(m1));
+                // SAFETY: each thread sets the right-hand side of its own columns.
+                let rhs = |side: usize| unsafe { shared.set_rhs(halves_of(side), end_acc) };
+                join(|| rhs(0), || rhs(1));
+                let tiny = BlockLdl::singular_below(scale);
                 // SAFETY: components share no slot, pivot or right-hand side entry.
                 let solve =
                     |side: usize| unsafe { shared.factor_and_solve(&halves.columns[side], tiny) };
