@@ -1,7 +1,7 @@
 //! The step allocates nothing: a counting global allocator watches `advance`.
 
 mod alloc_support;
-use alloc_support::{allocations, watch_this_thread};
+use alloc_support::{allocations, watch_all_threads, watch_this_thread};
 
 use tensegrity_fmu::scene::builtin;
 use tensegrity_fmu::{Model, Simulation};
@@ -12,6 +12,29 @@ fn stepping_allocates_nothing() {
     watch_this_thread();
     fixed_steps_allocate_nothing();
     every_method_advances_without_allocating();
+    two_threads_allocate_nothing();
+}
+
+/// A tower of 4,200 bars evaluates on two threads; neither allocates in a step (every
+/// thread is watched: the second is the library's).
+fn two_threads_allocate_nothing() {
+    use tensegrity_fmu::dynamics::parallel::{Halves, MIN_BARS};
+    let mut scene = tensegrity_fmu::scene::tower_scene(1400, Some(500.0), "tower");
+    scene.prestress = None;
+    for c in &mut scene.cables {
+        c.rest_length = Some(0.5);
+    }
+    let model = Model::new(&scene).unwrap();
+    assert!(Halves::new(&model, MIN_BARS).is_some(), "on two threads");
+    let mut sim = Simulation::new(model);
+    sim.inputs.node_force[0].x = 1.0;
+    sim.advance(2, 1e-3).unwrap();
+    watch_all_threads(true);
+    let before = allocations();
+    sim.advance(20, 1e-3).unwrap();
+    let during = allocations() - before;
+    watch_all_threads(false);
+    assert_eq!(during, 0, "{during} allocations in 20 steps on two threads");
 }
 
 fn every_method_advances_without_allocating() {

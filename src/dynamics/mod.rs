@@ -19,7 +19,7 @@ use nalgebra::Vector3;
 use crate::model::reactions::Reactions;
 use crate::model::{CableLaw, Model};
 pub use effects::applied_forces;
-use parallel::Halves;
+use parallel::{Halves, Helper};
 
 /// Values an importer sets between steps.
 #[derive(Debug, Clone, PartialEq)]
@@ -54,6 +54,17 @@ impl Inputs {
 /// the first λ pass for the second.
 type BarKept = (Vector3<f64>, f64, f64);
 
+/// A workspace's split between two threads and its second thread; a copy of the workspace
+/// gets a thread of its own (two simulations must not share one).
+#[derive(Debug)]
+struct TwoThreads(Arc<(Halves, Helper)>);
+
+impl Clone for TwoThreads {
+    fn clone(&self) -> Self {
+        Self(Arc::new((self.0 .0.clone(), Helper::default())))
+    }
+}
+
 /// Scratch space for one evaluation; allocated once per simulation.
 #[derive(Debug, Clone)]
 pub struct Workspace {
@@ -81,8 +92,9 @@ pub struct Workspace {
     reactions: Reactions,
     /// Evaluations where the sparse reaction factor failed and the dense solve was used.
     pub dense_fallbacks: u64,
-    /// The split of each evaluation between two threads, for large structures.
-    halves: Option<Arc<Halves>>,
+    /// The split of each evaluation between two threads, for large structures, and the
+    /// second thread.
+    halves: Option<TwoThreads>,
 }
 
 impl Workspace {
@@ -125,7 +137,8 @@ impl Workspace {
             bars: vec![(Vector3::zeros(), 0.0, 1.0); model.bars.len()],
             reactions: model.reactions.clone(),
             dense_fallbacks: 0,
-            halves: Halves::new(model, min_bars).map(Arc::new),
+            halves: Halves::new(model, min_bars)
+                .map(|h| TwoThreads(Arc::new((h, Helper::default())))),
         }
     }
 }
@@ -144,8 +157,10 @@ pub fn accelerations(
     ws: &mut Workspace,
     acc: &mut [f64],
 ) {
-    if let Some(halves) = ws.halves.clone() {
-        return parallel::evaluate(model, &halves, inputs, t, q, v, ws, acc);
+    if let Some(TwoThreads(two)) = &ws.halves {
+        // The handle, not the workspace's copy (which starts a thread of its own).
+        let two = Arc::clone(two);
+        return parallel::evaluate(model, (&two.0, &two.1), inputs, t, q, v, ws, acc);
     }
     #[cfg(target_arch = "x86_64")]
     if std::arch::is_x86_feature_detected!("avx2") {

@@ -3,11 +3,13 @@
 
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::cell::Cell;
-use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 
 struct Counting;
 
 static ALLOCATIONS: AtomicUsize = AtomicUsize::new(0);
+/// Count every thread's allocations (a library thread, which no test can ask to watch).
+static ALL: AtomicBool = AtomicBool::new(false);
 
 thread_local! {
     static WATCHED: Cell<bool> = const { Cell::new(false) };
@@ -15,7 +17,7 @@ thread_local! {
 
 unsafe impl GlobalAlloc for Counting {
     unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        if WATCHED.with(Cell::get) {
+        if ALL.load(Ordering::SeqCst) || WATCHED.with(Cell::get) {
             ALLOCATIONS.fetch_add(1, Ordering::SeqCst);
         }
         System.alloc(layout)
@@ -31,6 +33,13 @@ static GLOBAL: Counting = Counting;
 /// Starts counting this thread's allocations.
 pub fn watch_this_thread() {
     WATCHED.with(|w| w.set(true));
+}
+
+/// Counts every thread's allocations while `on` (the test binary's other threads must be
+/// idle meanwhile).
+#[allow(dead_code)]
+pub fn watch_all_threads(on: bool) {
+    ALL.store(on, Ordering::SeqCst);
 }
 
 /// Allocations counted so far.

@@ -1,9 +1,9 @@
 //! An evaluation on two threads, for large structures.
 //!
-//! Each stage's items are split in two halves run with `rayon::join`: ends, nodes and bars
-//! by index, forces by the ends they act on, K's blocks by the bars that set them, and the
-//! reactions by the connected components of K (a tower's three chains of joints), which
-//! factor independently. An item's arithmetic is the one-thread evaluation's, and every sum
+//! Each stage's items are split in two halves, one run on the calling thread and one on
+//! the workspace's [`Helper`]: ends, nodes and bars by index, forces by the ends they act
+//! on, K's blocks by the bars that set them, and the reactions by the connected components
+//! of K (a tower's three chains of joints), which factor independently. An item's arithmetic is the one-thread evaluation's, and every sum
 //! keeps its order: where both halves add to one value (a block of K at the seam, the
 //! acceleration of a node the seam's two bars share), the second half's terms wait until
 //! both halves are done and are added in order after them. So the results are the same
@@ -13,8 +13,11 @@
 //! this 2-core machine one core draws about half of what two draw together (two copies of
 //! the 60,000-bar benchmark run side by side without slowing each other).
 
+mod helper;
+
 use nalgebra::Vector3;
-use rayon::join;
+
+pub use helper::Helper;
 
 use super::effects::{self, ForceEffect, ForceSink};
 use super::{pairs, pairs_mut, response, BarKept, Inputs, Workspace};
@@ -295,11 +298,12 @@ impl ForceSink for HalfSink {
     }
 }
 
-/// [`super::evaluate`] on two threads (the sparse basis, see [`Halves::new`]).
+/// [`super::evaluate`] on two threads (the sparse basis, see [`Halves::new`]): this one and
+/// `helper`'s.
 #[allow(clippy::too_many_arguments)]
 pub(super) fn evaluate(
     model: &Model,
-    halves: &Halves,
+    (halves, helper): (&Halves, &Helper),
     inputs: &Inputs,
     t: f64,
     q: &[f64],
@@ -310,8 +314,7 @@ pub(super) fn evaluate(
     let coords = &model.coords;
     let single = coords.single.as_deref().expect("the sparse basis");
     let (b, e) = (halves.bars, 2 * halves.bars);
-    // The whole evaluation runs on the pool, so its joins are a worker's (cheap).
-    rayon::scope(|_| {
+    {
         // Stage 1: kinematics (and the zeroing of the end forces and accelerations).
         {
             let (p0, p1) = ws.end_pos.split_at_mut(e);
@@ -320,7 +323,7 @@ pub(super) fn evaluate(
             let (a0, a1) = acc.split_at_mut(acc.len() / 2);
             let (s0, s1) = single.split_at(e);
             let (c0, c1) = coords.fixed.split_at(e);
-            join(
+            helper.join(
                 || ends_half((s0, c0), (q, v), (p0, v0, f0), a0),
                 || ends_half((s1, c1), (q, v), (p1, v1, f1), a1),
             );
@@ -330,7 +333,7 @@ pub(super) fn evaluate(
             let ends = (ws.end_pos.as_slice(), ws.end_vel.as_slice());
             let (x0, x1) = ws.node_pos.split_at_mut(n);
             let (xd0, xd1) = ws.node_vel.split_at_mut(n);
-            join(
+            helper.join(
                 || super::node_states(&coords.node_end[..n], ends, (x0, xd0)),
                 || super::node_states(&coords.node_end[n..], ends, (x1, xd1)),
             );
@@ -344,7 +347,7 @@ pub(super) fn evaluate(
                 let mut sink = HalfSink { end_force, gamma };
                 effects::apply(&halves.forces[side], inputs, t, nodes, &mut sink);
             };
-            join(|| half(0), || half(1));
+            helper.join(|| half(0), || half(1));
             if !halves.after.is_empty() {
                 let mut sink = effects::Slices {
                     end_force: &mut ws.end_force,
@@ -387,7 +390,7 @@ pub(super) fn evaluate(
             let deferred = &halves.deferred;
             // Each part also gathers the largest diagonal magnitude of the pivot blocks it
             // closes: the scale of the singularity threshold.
-            let (amax0, amax1) = join(
+            let (amax0, amax1) = helper.join(
                 || {
                     let mut amax: f64 = 0.0;
                     first_response(model, given(0..b), (acc0, l0, k0), |i, bv, l2| {
@@ -431,18 +434,18 @@ pub(super) fn evaluate(
                 let halves_of = |side: usize| [0..halves.even, halves.even..n][side].clone();
                 // SAFETY: each thread sets the right-hand side of its own columns.
                 let rhs = |side: usize| unsafe { shared.set_rhs(halves_of(side), end_acc) };
-                join(|| rhs(0), || rhs(1));
+                helper.join(|| rhs(0), || rhs(1));
                 let tiny = BlockLdl::singular_below(scale);
                 // SAFETY: components share no slot, pivot or right-hand side entry.
                 let solve =
                     |side: usize| unsafe { shared.factor_and_solve(&halves.columns[side], tiny) };
-                let (ok0, ok1) = join(|| solve(0), || solve(1));
+                let (ok0, ok1) = helper.join(|| solve(0), || solve(1));
                 if ok0 && ok1 {
                     let end_force = Disjoint::new(&mut ws.end_force);
                     // SAFETY: the two threads' columns act on different ends (`Halves::new`).
                     let add =
                         |side: usize| unsafe { shared.add_to(halves_of(side), end_force.ptr()) };
-                    join(|| add(0), || add(1));
+                    helper.join(|| add(0), || add(1));
                 }
                 ok0 && ok1
             };
@@ -461,7 +464,7 @@ pub(super) fn evaluate(
             let (acc0, acc1) = pairs_mut(&mut ws.end_acc).split_at_mut(b);
             let (l0, l1) = ws.lambda.split_at_mut(b);
             let (kept, forces) = (ws.bars.as_slice(), pairs(&ws.end_force));
-            join(
+            helper.join(
                 || {
                     let given = (&kept[..b], &forces[..b]);
                     super::second_response((&per_bar.0[..b], &per_bar.1[..b]), given, (acc0, l0))
@@ -487,14 +490,14 @@ pub(super) fn evaluate(
                 }
             }
         };
-        join(|| scatter(0..e, false), || scatter(e..single.len(), true));
+        helper.join(|| scatter(0..e, false), || scatter(e..single.len(), true));
         for &k in &halves.late_ends {
             if let Some((g, c)) = single[k] {
                 // SAFETY: both halves are done; one thread.
                 super::add_scaled(unsafe { out.at(g) }, c, &end_acc[k]);
             }
         }
-    });
+    }
 }
 
 /// Stage 1 for one half of the ends: positions and velocities, and the end forces and

@@ -1,0 +1,237 @@
+//! The second thread of a two-thread evaluation.
+//!
+//! One thread per workspace, started when it first evaluates and joined when it is dropped,
+//! so an FMU leaves no thread behind when its instance is freed (a global pool's threads
+//! would outlive the library). Handing it work allocates nothing: the job is a function
+//! pointer and a pointer to a closure on the caller's stack, and the caller waits for it
+//! before that frame returns (as `std::thread::scope` does).
+
+use std::any::Any;
+use std::cell::UnsafeCell;
+use std::panic::{catch_unwind, resume_unwind, AssertUnwindSafe};
+use std::sync::atomic::{AtomicU32, Ordering};
+use std::sync::{Arc, Mutex, OnceLock};
+use std::thread::{JoinHandle, Thread};
+use std::time::{Duration, Instant};
+
+/// No job (the helper waits for one).
+const IDLE: u32 = 0;
+/// A job is posted (the helper runs it, the poster waits).
+const POSTED: u32 = 1;
+/// The job is done (the poster takes its result and sets `IDLE`).
+const DONE: u32 = 2;
+/// The helper returns.
+const EXIT: u32 = 3;
+
+/// How long a waiting thread spins before it sleeps: the stages of one evaluation follow
+/// each other within microseconds, the evaluations of a step within a millisecond or so.
+const SPIN: Duration = Duration::from_micros(50);
+
+/// A job: a function that runs the closure behind the pointer.
+#[derive(Clone, Copy)]
+struct Job {
+    run: unsafe fn(*mut ()),
+    data: *mut (),
+}
+
+struct Shared {
+    state: AtomicU32,
+    job: UnsafeCell<Option<Job>>,
+    /// The thread waiting for the job (woken when it is done).
+    waiter: UnsafeCell<Option<Thread>>,
+    panic: Mutex<Option<Box<dyn Any + Send>>>,
+}
+
+// SAFETY: `job` and `waiter` are written by the posting thread before it publishes
+// `POSTED` (release) and read by the helper after it sees it (acquire); the posting thread
+// reads nothing back until it sees `DONE`.
+unsafe impl Sync for Shared {}
+unsafe impl Send for Shared {}
+
+/// The helper thread, started on first use.
+#[derive(Default)]
+pub struct Helper {
+    started: OnceLock<Option<Started>>,
+}
+
+struct Started {
+    shared: Arc<Shared>,
+    thread: Option<JoinHandle<()>>,
+}
+
+impl std::fmt::Debug for Helper {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str("Helper")
+    }
+}
+
+/// A clone starts its own thread when it first joins (FMU snapshots clone workspaces, and
+/// most are never stepped).
+impl Clone for Helper {
+    fn clone(&self) -> Self {
+        Self::default()
+    }
+}
+
+impl Helper {
+    /// Runs `a` here and `b` on the helper thread, and returns both results when both are
+    /// done; a panic in either is resumed here. Without a thread (the system refused one)
+    /// both run here, one after the other.
+    pub fn join<A, B, RA, RB>(&self, a: A, b: B) -> (RA, RB)
+    where
+        A: FnOnce() -> RA,
+        B: FnOnce() -> RB + Send,
+        RB: Send,
+    {
+        let Some(started) = self.started.get_or_init(Started::spawn) else {
+            return (a(), b());
+        };
+        let shared = &started.shared;
+        let mut slot: (Option<B>, Option<RB>) = (Some(b), None);
+        unsafe fn run<B: FnOnce() -> RB, RB>(data: *mut ()) {
+            let slot = &mut *(data as *mut (Option<B>, Option<RB>));
+            let b = slot.0.take().expect("a job runs once");
+            slot.1 = Some(b());
+        }
+        // SAFETY: the helper only reads these after `POSTED`, and this frame (which owns
+        // `slot`) waits for `DONE` before it returns, even if `a` panics.
+        unsafe {
+            *shared.job.get() = Some(Job {
+                run: run::<B, RB>,
+                data: &mut slot as *mut _ as *mut (),
+            });
+            *shared.waiter.get() = Some(std::thread::current());
+        }
+        shared.state.store(POSTED, Ordering::Release);
+        if let Some(thread) = &started.thread {
+            thread.thread().unpark();
+        }
+        let ra = catch_unwind(AssertUnwindSafe(a));
+        wait_until(&shared.state, |s| s != POSTED);
+        shared.state.store(IDLE, Ordering::Relaxed);
+        let helper_panic = shared.panic.lock().map(|mut p| p.take()).unwrap_or(None);
+        match (ra, helper_panic) {
+            (Err(payload), _) | (Ok(_), Some(payload)) => resume_unwind(payload),
+            (Ok(ra), None) => (ra, slot.1.expect("the job ran")),
+        }
+    }
+}
+
+impl Started {
+    fn spawn() -> Option<Self> {
+        let shared = Arc::new(Shared {
+            state: AtomicU32::new(IDLE),
+            job: UnsafeCell::new(None),
+            waiter: UnsafeCell::new(None),
+            panic: Mutex::new(None),
+        });
+        let theirs = Arc::clone(&shared);
+        let thread = std::thread::Builder::new()
+            .name("tensegrity-helper".into())
+            .spawn(move || serve(&theirs))
+            .ok()?;
+        Some(Self {
+            shared,
+            thread: Some(thread),
+        })
+    }
+}
+
+/// The helper's loop: each posted job runs once, then `DONE` and its waiter woken.
+fn serve(shared: &Shared) {
+    loop {
+        wait_until(&shared.state, |s| s == POSTED || s == EXIT);
+        match shared.state.load(Ordering::Acquire) {
+            EXIT => return,
+            POSTED => {
+                // SAFETY: posted before `POSTED` was published; the poster waits.
+                let (job, waiter) =
+                    unsafe { ((*shared.job.get()).take(), (*shared.waiter.get()).take()) };
+                if let Some(job) = job {
+                    // SAFETY: `data` points at the poster's slot for `run`'s closure type.
+                    let result = catch_unwind(|| unsafe { (job.run)(job.data) });
+                    if let Err(payload) = result {
+                        if let Ok(mut p) = shared.panic.lock() {
+                            *p = Some(payload);
+                        }
+                    }
+                }
+                shared.state.store(DONE, Ordering::Release);
+                if let Some(waiter) = waiter {
+                    waiter.unpark();
+                }
+            }
+            _ => unreachable!("waited for a job or the exit"),
+        }
+    }
+}
+
+/// Returns once `state` satisfies `ready`: spins for [`SPIN`], then sleeps until woken
+/// (parking may wake spuriously, so it checks again).
+fn wait_until(state: &AtomicU32, ready: impl Fn(u32) -> bool) {
+    let start = Instant::now();
+    let mut spins = 0u32;
+    while !ready(state.load(Ordering::Acquire)) {
+        if spins < 64 || start.elapsed() < SPIN {
+            spins = spins.saturating_add(1);
+            std::hint::spin_loop();
+        } else {
+            std::thread::park_timeout(Duration::from_millis(10));
+        }
+    }
+}
+
+impl Drop for Started {
+    fn drop(&mut self) {
+        self.shared.state.store(EXIT, Ordering::Release);
+        if let Some(thread) = self.thread.take() {
+            thread.thread().unpark();
+            let _ = thread.join();
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Both closures run, on two threads, and return their results.
+    #[test]
+    fn runs_both_sides_on_two_threads() {
+        let helper = Helper::default();
+        let here = std::thread::current().id();
+        for k in 0..100 {
+            let (a, (b, id)) = helper.join(|| k * 2, move || (k + 1, std::thread::current().id()));
+            assert_eq!((a, b), (2 * k, k + 1));
+            assert_ne!(id, here, "the second closure ran on the helper");
+        }
+    }
+
+    /// A panic on the helper reaches the caller, and the helper serves the next job.
+    #[test]
+    fn a_panic_on_the_helper_reaches_the_caller() {
+        let helper = Helper::default();
+        let caught = catch_unwind(AssertUnwindSafe(|| {
+            helper.join(|| 1, || -> i32 { panic!("on the helper") })
+        }));
+        let message = caught.expect_err("resumed here");
+        assert_eq!(message.downcast_ref::<&str>(), Some(&"on the helper"));
+        assert_eq!(helper.join(|| 3, || 4), (3, 4));
+    }
+
+    /// Dropping the helper joins its thread (nothing is left running).
+    #[test]
+    fn dropping_joins_the_thread() {
+        let helper = Helper::default();
+        assert_eq!(helper.join(|| 1, || 2), (1, 2));
+        let started = helper
+            .started
+            .get()
+            .and_then(Option::as_ref)
+            .expect("started");
+        let handle = started.thread.as_ref().expect("a thread").thread().clone();
+        drop(helper);
+        // A joined thread's handle can still be unparked; the thread is gone.
+        handle.unpark();
+    }
+}
