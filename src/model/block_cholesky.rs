@@ -341,22 +341,14 @@ impl BlockLdl {
     /// order as a separate forward pass). False if K is not (numerically) positive
     /// definite, which includes any NaN in it (a NaN reaches a pivot, and fails its test);
     /// `b` is then overwritten too.
-    ///
-    /// The scalar factor's singularity threshold is scaled by `amax`, the largest magnitude
-    /// on K's diagonal as assembled, when the caller gathered it (else, NaN, by a pass over
-    /// K); the lanes find theirs.
     #[inline(always)]
-    pub fn factor_and_solve(&mut self, b: &mut DVector<f64>, amax: f64) -> bool {
+    pub fn factor_and_solve(&mut self, b: &mut DVector<f64>) -> bool {
         let (b, _) = b.as_mut_slice().as_chunks_mut::<3>();
         let b = &mut b[..self.n];
         if let Some(lanes) = &mut self.lanes {
             return lanes.factor_and_solve(SINGULAR, b);
         }
-        let tiny = Self::singular_below(if amax.is_nan() {
-            self.tiny_scale()
-        } else {
-            amax
-        });
+        let tiny = Self::singular_below(self.diagonal_scale());
         let n = self.n;
         let shared = self.shared();
         // SAFETY: one caller, holding `self` and `b` exclusively.
@@ -404,20 +396,13 @@ impl BlockLdl {
     }
 
     /// The largest magnitude on K's diagonal as assembled (the lanes find theirs the same
-    /// way).
+    /// way; two threads gather it as they assemble K).
     #[inline(always)]
-    fn tiny_scale(&self) -> f64 {
-        let scale = self.pattern.l_start[..self.n]
+    pub(crate) fn diagonal_scale(&self) -> f64 {
+        self.pattern.l_start[..self.n]
             .iter()
             .map(|&d| diagonal_amax(&self.k_values[d]))
-            .fold(0.0, f64::max);
-        scale
-    }
-
-    /// The largest magnitude on the diagonal of K's block at `slot` (the scalar factor's).
-    #[inline(always)]
-    pub fn diagonal_amax(&self, slot: usize) -> f64 {
-        diagonal_amax(&self.k_values[slot])
+            .fold(0.0, f64::max)
     }
 
     /// K as a dense symmetric matrix (for the indeterminate fallback), as put, before a
@@ -576,7 +561,7 @@ mod tests {
         let (mut chol, b) = random_spd(7, &pattern, 12345);
         let dense: DMatrix<f64> = chol.dense();
         let mut x = b.clone();
-        assert!(chol.factor_and_solve(&mut x, f64::NAN));
+        assert!(chol.factor_and_solve(&mut x));
         let expected = dense.cholesky().unwrap().solve(&b);
         assert!((x - expected).amax() < 1e-12);
     }
@@ -590,7 +575,7 @@ mod tests {
             let idx = chol.k_index(r, c).unwrap();
             chol.set(idx, &m);
         }
-        assert!(!chol.factor_and_solve(&mut DVector::zeros(6), f64::NAN));
+        assert!(!chol.factor_and_solve(&mut DVector::zeros(6)));
     }
 
     /// Three uncoupled chains with the same pattern, interleaved as the tower's are (column
@@ -618,10 +603,7 @@ mod tests {
             let mut scalar = lanes.clone().without_lanes();
             let dense = lanes.dense();
             let (mut x, mut y) = (b.clone(), b.clone());
-            assert!(
-                lanes.factor_and_solve(&mut x, f64::NAN)
-                    && scalar.factor_and_solve(&mut y, f64::NAN)
-            );
+            assert!(lanes.factor_and_solve(&mut x) && scalar.factor_and_solve(&mut y));
             for (p, q) in x.iter().zip(y.iter()) {
                 assert_eq!(p.to_bits(), q.to_bits());
             }
@@ -649,9 +631,9 @@ mod tests {
         }
         let mut scalar = lanes.clone().without_lanes();
         let (mut x, mut y) = (b.clone(), b.clone());
-        assert!(scalar.factor_and_solve(&mut y, f64::NAN));
+        assert!(scalar.factor_and_solve(&mut y));
         assert!(
-            lanes.factor_and_solve(&mut x, f64::NAN),
+            lanes.factor_and_solve(&mut x),
             "the padding lane failed its pivot test"
         );
         assert!(x
@@ -668,8 +650,8 @@ mod tests {
         chol.set(idx, &Matrix3::zeros());
         assert!(chol.has_lanes());
         let mut scalar = chol.clone().without_lanes();
-        assert!(!chol.factor_and_solve(&mut b.clone(), f64::NAN));
-        assert!(!scalar.factor_and_solve(&mut b.clone(), f64::NAN));
+        assert!(!chol.factor_and_solve(&mut b.clone()));
+        assert!(!scalar.factor_and_solve(&mut b.clone()));
     }
 
     /// Chains of different patterns stay on the scalar factor.

@@ -81,19 +81,14 @@ pub struct Reactions {
     /// Right-hand side, then solution Ω (3 per constraint column, in the system's
     /// numbering: see [`Self::solution`]).
     pub rhs: DVector<f64>,
-    /// The constraint columns' `(end, coefficient)` terms, flat, column c (in the
-    /// coordinates' numbering, so that the ends are visited in order) at
-    /// `term_start[c]..term_start[c + 1]`.
+    /// The constraint columns' `(end, coefficient)` terms, flat, column c (in the system's
+    /// numbering) at `term_start[c]..term_start[c + 1]`.
     term_start: Vec<usize>,
     terms: Vec<(usize, f64)>,
     /// Sparse slots no contribution sets (see [`Contribution::first`]).
     unassigned: Vec<usize>,
     /// Per constraint column of the coordinates, its number in the system.
     internal: Vec<usize>,
-    /// The largest magnitude on K's diagonal as assembled, gathered as each pivot block is
-    /// closed when `track_scale` (the scalar factor: no pass over K before it is factored).
-    scale: f64,
-    track_scale: bool,
 }
 
 impl Reactions {
@@ -186,11 +181,10 @@ impl Reactions {
         let unassigned = (0..slots).filter(|&p| !assigned[p]).collect();
         let mut term_start = vec![0];
         let mut terms = Vec::new();
-        for col in &coords.constraints {
-            terms.extend_from_slice(&col.terms);
+        for &c in &order {
+            terms.extend_from_slice(&coords.constraints[c].terms);
             term_start.push(terms.len());
         }
-        let track_scale = matches!(&solver, Solver::Sparse(chol) if !chol.has_lanes());
         Self {
             n,
             bar_start,
@@ -201,8 +195,6 @@ impl Reactions {
             terms,
             unassigned,
             internal,
-            scale: 0.0,
-            track_scale,
         }
     }
 
@@ -218,7 +210,6 @@ impl Reactions {
     pub(crate) fn without_lanes(mut self) -> Self {
         if let Solver::Sparse(chol) = self.solver {
             self.solver = Solver::Sparse(Box::new(chol.without_lanes()));
-            self.track_scale = true;
         }
         self
     }
@@ -247,12 +238,12 @@ impl Reactions {
     #[inline(always)]
     pub fn set_rhs(&mut self, end_acc: &[Vector3<f64>]) {
         let (rhs, _) = self.rhs.as_mut_slice().as_chunks_mut::<3>();
-        for (&i, span) in self.internal.iter().zip(self.term_start.windows(2)) {
+        for (r, span) in rhs.iter_mut().zip(self.term_start.windows(2)) {
             let mut sum = Vector3::zeros();
             for &(e, coef) in &self.terms[span[0]..span[1]] {
                 sum += end_acc[e] * coef;
             }
-            rhs[i] = [-sum.x, -sum.y, -sum.z];
+            *r = [-sum.x, -sum.y, -sum.z];
         }
     }
 
@@ -260,8 +251,8 @@ impl Reactions {
     #[inline(always)]
     pub fn add_to(&self, end_force: &mut [Vector3<f64>]) {
         let (omega, _) = self.rhs.as_slice().as_chunks::<3>();
-        for (&i, span) in self.internal.iter().zip(self.term_start.windows(2)) {
-            let o = Vector3::from(omega[i]);
+        for (o, span) in omega.iter().zip(self.term_start.windows(2)) {
+            let o = Vector3::from(*o);
             for &(e, coef) in &self.terms[span[0]..span[1]] {
                 end_force[e] += o * coef;
             }
@@ -272,7 +263,6 @@ impl Reactions {
     /// no bar sets).
     #[inline(always)]
     pub fn clear(&mut self) {
-        self.scale = 0.0;
         match &mut self.solver {
             Solver::Sparse(chol) => {
                 for &p in &self.unassigned {
@@ -298,9 +288,6 @@ impl Reactions {
             Solver::Sparse(chol) => {
                 for c in contributions {
                     chol.put_symmetric(c.slot, &block(c), c.first);
-                    if self.track_scale && c.closes_pivot {
-                        self.scale = self.scale.max(chol.diagonal_amax(c.slot));
-                    }
                 }
             }
             Solver::Dense(values) => {
@@ -329,12 +316,7 @@ impl Reactions {
             return true;
         }
         if let Solver::Sparse(chol) = &mut self.solver {
-            let amax = if self.track_scale {
-                self.scale
-            } else {
-                f64::NAN
-            };
-            if chol.factor_and_solve(&mut self.rhs, amax) {
+            if chol.factor_and_solve(&mut self.rhs) {
                 return true;
             }
             assemble_again(self);
@@ -433,7 +415,8 @@ impl Reactions {
 
     /// Constraint column `c`'s `(end, coefficient)` terms (the coordinates' numbering).
     pub(crate) fn column_terms(&self, c: usize) -> &[(usize, f64)] {
-        &self.terms[self.term_start[c]..self.term_start[c + 1]]
+        let i = self.internal[c];
+        &self.terms[self.term_start[i]..self.term_start[i + 1]]
     }
 }
 
@@ -476,11 +459,12 @@ impl SharedReactions<'_> {
     #[inline(always)]
     pub unsafe fn set_rhs(&self, columns: std::ops::Range<usize>, end_acc: &[Vector3<f64>]) {
         for c in columns {
+            let i = self.internal[c];
             let mut sum = Vector3::zeros();
-            for &(e, coef) in &self.terms[self.term_start[c]..self.term_start[c + 1]] {
+            for &(e, coef) in &self.terms[self.term_start[i]..self.term_start[i + 1]] {
                 sum += end_acc[e] * coef;
             }
-            *self.rhs.add(self.internal[c]) = [-sum.x, -sum.y, -sum.z];
+            *self.rhs.add(i) = [-sum.x, -sum.y, -sum.z];
         }
     }
 
@@ -508,8 +492,9 @@ impl SharedReactions<'_> {
     #[inline(always)]
     pub unsafe fn add_to(&self, columns: std::ops::Range<usize>, end_force: *mut Vector3<f64>) {
         for c in columns {
-            let o = Vector3::from(*self.rhs.add(self.internal[c]));
-            for &(e, coef) in &self.terms[self.term_start[c]..self.term_start[c + 1]] {
+            let i = self.internal[c];
+            let o = Vector3::from(*self.rhs.add(i));
+            for &(e, coef) in &self.terms[self.term_start[i]..self.term_start[i + 1]] {
                 *end_force.add(e) += o * coef;
             }
         }
@@ -581,6 +566,35 @@ mod tests {
         assert!(dense.solve(|_| unreachable!("a dense K is kept")));
         let diff = (&sparse.rhs - &dense.rhs).amax();
         assert!(diff <= 1e-12 * dense.rhs.amax(), "differ by {diff:e}");
+    }
+
+    /// The scale of the singularity threshold that two threads gather as they close each
+    /// pivot block of K is the one the one-thread factor finds by a pass over K.
+    #[test]
+    fn the_gathered_scale_is_the_factors() {
+        let mut scene = crate::scene::tower_scene(30, Some(500.0), "tower");
+        scene.prestress = None;
+        for (i, bar) in scene.bars.iter_mut().enumerate() {
+            bar.mass = 1.0 + 0.1 * (i % 7) as f64;
+        }
+        for c in &mut scene.cables {
+            c.rest_length = Some(0.5);
+        }
+        let model = Model::new(&scene).unwrap();
+        let mut r = Reactions::new(&model.coords, &model.inertia, false).without_lanes();
+        r.clear();
+        let mut gathered: f64 = 0.0;
+        let shared = r.shared().expect("the scalar factor");
+        for (i, b) in model.bars.iter().enumerate() {
+            let bv = model.positions[b.nodes[1]] - model.positions[b.nodes[0]];
+            let bv = bv + Vector3::new(0.01, -0.02, 0.03) * (i as f64).sin();
+            // SAFETY: one thread.
+            let closed = unsafe { shared.add_bar(i, &bv, 1.0 / bv.norm_squared(), |_| false) };
+            gathered = gathered.max(closed);
+        }
+        let pass = r.sparse().unwrap().diagonal_scale();
+        assert!(pass > 0.0);
+        assert_eq!(gathered.to_bits(), pass.to_bits());
     }
 
     /// The tower's three chains of joints (one per strut of a stage) are factored side by
