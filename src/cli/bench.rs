@@ -7,7 +7,7 @@ use tensegrity_fmu::scene::{builtin, tower_scene, Scene};
 use tensegrity_fmu::{Model, Simulation};
 
 /// Step size of every measured run, s.
-const STEP: f64 = 1e-3;
+pub const STEP: f64 = 1e-3;
 
 /// `scene` stepped by rk4 at [`STEP`], the method and step these benchmarks time (the
 /// scenes' own default is the adaptive dopri5).
@@ -17,23 +17,29 @@ pub fn with_rk4(mut scene: Scene) -> Scene {
     scene
 }
 
+/// A tower of `k` stages with elastic cables at 98% of their lengths (explicit rest lengths:
+/// the dense prestress solve is not what is measured), stepped by rk4 at [`STEP`].
+pub fn tower(k: usize) -> Scene {
+    let mut scene = with_rk4(tower_scene(k, Some(500.0), &format!("tower{k}")));
+    scene.prestress = None;
+    for c in &mut scene.cables {
+        let [a, b] = c.nodes;
+        let d: f64 = (0..3)
+            .map(|i| (scene.nodes[b - 1][i] - scene.nodes[a - 1][i]).powi(2))
+            .sum::<f64>()
+            .sqrt();
+        c.rest_length = Some(0.98 * d);
+    }
+    scene
+}
+
 /// Prints one row per tower height and the ratio of µs per bar-step to the smallest tower's.
 pub fn scaling(stages: &[usize], seconds: f64) -> Result<(), String> {
     println!("| stages | bars | build (ms) | µs/step | µs/(step·bar) | ratio to linear |");
     println!("|---:|---:|---:|---:|---:|---:|");
     let mut base: Option<f64> = None;
     for &k in stages {
-        let mut scene = with_rk4(tower_scene(k, Some(500.0), &format!("tower{k}")));
-        // Explicit rest lengths: the dense prestress solve is not what is measured here.
-        scene.prestress = None;
-        for c in &mut scene.cables {
-            let [a, b] = c.nodes;
-            let d: f64 = (0..3)
-                .map(|i| (scene.nodes[b - 1][i] - scene.nodes[a - 1][i]).powi(2))
-                .sum::<f64>()
-                .sqrt();
-            c.rest_length = Some(0.98 * d);
-        }
+        let scene = tower(k);
         let started = Instant::now();
         let model = Model::new(&scene).map_err(|e| e.to_string())?;
         let build_ms = started.elapsed().as_secs_f64() * 1e3;

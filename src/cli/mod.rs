@@ -5,6 +5,7 @@ mod bench;
 mod bench_csv;
 mod bench_effects;
 mod bench_stiff;
+mod bench_threads;
 mod inputs;
 mod render;
 mod report;
@@ -169,6 +170,19 @@ enum BenchCommand {
         #[arg(long, default_value_t = 5)]
         repeats: usize,
     },
+    /// µs per step of large towers evaluated on one thread and on two, in alternation in
+    /// one process, with the median ratio of the rounds.
+    Threads {
+        /// Tower heights in stages (from 1,334 stages, 4,002 bars, they take two threads).
+        #[arg(long, value_delimiter = ',', default_value = "2000,6667,20000")]
+        stages: Vec<usize>,
+        /// Wall time per measurement, s.
+        #[arg(long, default_value_t = 1.0)]
+        seconds: f64,
+        /// Rounds of one measurement each way.
+        #[arg(long, default_value_t = 5)]
+        rounds: usize,
+    },
 }
 
 /// Runs one command; errors come back as messages.
@@ -227,6 +241,15 @@ pub fn run(cli: Cli) -> Result<(), String> {
             what: Some(BenchCommand::Effects { seconds, repeats }),
             ..
         } => bench_effects::run(seconds, repeats),
+        Command::Bench {
+            what:
+                Some(BenchCommand::Threads {
+                    stages,
+                    seconds,
+                    rounds,
+                }),
+            ..
+        } => bench_threads::run(&stages, seconds, rounds),
         Command::Bench {
             what: Some(BenchCommand::Stiff { repeats }),
             ..

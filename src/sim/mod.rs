@@ -172,6 +172,18 @@ impl Simulation {
         sim
     }
 
+    /// Evaluates on two threads where the structure allows and is large enough (`true`, the
+    /// default: see [`crate::dynamics::parallel`]) or on this one only (`false`).
+    pub fn use_two_threads(&mut self, on: bool) {
+        let from = if on {
+            crate::dynamics::parallel::MIN_BARS
+        } else {
+            usize::MAX
+        };
+        self.ws = Workspace::two_threads_from(&self.model, from);
+        self.refresh();
+    }
+
     /// The model.
     pub fn model(&self) -> &Model {
         &self.model

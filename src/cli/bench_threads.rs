@@ -1,0 +1,49 @@
+//! What the second thread buys: µs per rk4 step of large towers evaluated on one thread and
+//! on two, measured in alternation in one process (this machine's speed drifts, so each
+//! round's ratio is taken, and their median printed).
+
+use std::time::Instant;
+
+use tensegrity_fmu::{Model, Simulation};
+
+use super::bench::{tower, STEP};
+
+/// Prints, per tower height, µs per step on one thread and on two (the fastest round of
+/// each) and the median of the rounds' ratios.
+pub fn run(stages: &[usize], seconds: f64, rounds: usize) -> Result<(), String> {
+    println!("| stages | bars | one thread (µs/step) | two threads (µs/step) | two / one |");
+    println!("|---:|---:|---:|---:|---:|");
+    for &k in stages {
+        let model = Model::new(&tower(k)).map_err(|e| e.to_string())?;
+        let bars = model.bars.len();
+        let mut one = Simulation::new(model.clone());
+        one.use_two_threads(false);
+        let mut two = Simulation::new(model);
+        two.use_two_threads(true);
+        let (mut best, mut ratios) = ([f64::INFINITY; 2], Vec::new());
+        for _ in 0..rounds.max(1) {
+            let t = [time(&mut one, seconds)?, time(&mut two, seconds)?];
+            best = [best[0].min(t[0]), best[1].min(t[1])];
+            ratios.push(t[1] / t[0]);
+        }
+        ratios.sort_by(f64::total_cmp);
+        let median = ratios[ratios.len() / 2];
+        println!(
+            "| {k} | {bars} | {:.0} | {:.0} | {median:.2} |",
+            best[0], best[1]
+        );
+    }
+    Ok(())
+}
+
+/// µs per step of `sim` over at least `seconds` (and 20 steps).
+fn time(sim: &mut Simulation, seconds: f64) -> Result<f64, String> {
+    sim.advance(10, STEP).map_err(|e| e.to_string())?;
+    let started = Instant::now();
+    let mut steps = 0u64;
+    while started.elapsed().as_secs_f64() < seconds || steps < 20 {
+        sim.advance(10, STEP).map_err(|e| e.to_string())?;
+        steps += 10;
+    }
+    Ok(started.elapsed().as_secs_f64() * 1e6 / steps as f64)
+}
