@@ -29,7 +29,9 @@ fn install() {
                     .map(|l| format!(" at {}:{}", l.file(), l.line()))
                     .unwrap_or_default();
                 LAST_PANIC.with(|m| *m.borrow_mut() = format!("{what}{place}"));
-            } else {
+            } else if !tensegrity_fmu::dynamics::parallel::on_helper_thread() {
+                // A large structure's second thread is silent too: its panic is resumed in
+                // the FMI call that handed it the work, and reported there.
                 host(info);
             }
         }));
@@ -42,7 +44,19 @@ pub fn quietly<R>(body: impl FnOnce() -> R + UnwindSafe) -> Result<R, String> {
     let outer = IN_CALL.with(|c| c.replace(true));
     let result = panic::catch_unwind(body);
     IN_CALL.with(|c| c.set(outer));
-    result.map_err(|_| LAST_PANIC.with(|m| std::mem::take(&mut *m.borrow_mut())))
+    result.map_err(|payload| {
+        let here = LAST_PANIC.with(|m| std::mem::take(&mut *m.borrow_mut()));
+        if !here.is_empty() {
+            return here;
+        }
+        // Resumed from the second thread: the message is in the payload.
+        let what = payload
+            .downcast_ref::<&str>()
+            .map(|s| s.to_string())
+            .or_else(|| payload.downcast_ref::<String>().cloned())
+            .unwrap_or_else(|| "panic".to_string());
+        format!("{what} (on the evaluation's second thread)")
+    })
 }
 
 #[cfg(test)]
@@ -64,6 +78,16 @@ mod tests {
         assert!(message.contains("guard.rs:"), "{message}");
         assert_eq!(HOST_HOOK_CALLS.load(Ordering::SeqCst), 0, "nothing printed");
         assert_eq!(quietly(|| 5), Ok(5));
+        // On a large structure's second thread, inside a call: caught, silent, reported.
+        let helper = tensegrity_fmu::dynamics::parallel::Helper::default();
+        let caught = quietly(std::panic::AssertUnwindSafe(|| {
+            helper.join(|| 1, || -> u32 { panic!("on the helper") })
+        }));
+        assert_eq!(
+            caught.expect_err("the helper's panic is caught"),
+            "on the helper (on the evaluation's second thread)"
+        );
+        assert_eq!(HOST_HOOK_CALLS.load(Ordering::SeqCst), 0, "nothing printed");
         // Outside an FMI call the host's own hook still sees the panic.
         let outside = std::thread::spawn(|| panic!("host panic")).join();
         assert!(outside.is_err());

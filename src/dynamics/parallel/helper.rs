@@ -137,8 +137,19 @@ impl Started {
     }
 }
 
+thread_local! {
+    static ON_HELPER: std::cell::Cell<bool> = const { std::cell::Cell::new(false) };
+}
+
+/// Whether this thread is a workspace's second thread (whose panics are resumed on the
+/// thread that handed it the work: an FMU's panic hook keeps them off the host's stderr).
+pub fn on_helper_thread() -> bool {
+    ON_HELPER.with(std::cell::Cell::get)
+}
+
 /// The helper's loop: each posted job runs once, then `DONE` and its waiter woken.
 fn serve(shared: &Shared) {
+    ON_HELPER.with(|h| h.set(true));
     loop {
         wait_until(&shared.state, |s| s == POSTED || s == EXIT);
         match shared.state.load(Ordering::Acquire) {

@@ -17,7 +17,7 @@ mod helper;
 
 use nalgebra::Vector3;
 
-pub use helper::Helper;
+pub use helper::{on_helper_thread, Helper};
 
 use super::effects::{self, ForceEffect, ForceSink};
 use super::{pairs, pairs_mut, response, BarKept, Inputs, Workspace};
