@@ -129,6 +129,24 @@ fn a_failed_factor_in_an_evaluation_falls_back_on_k_as_assembled() {
     }
 }
 
+/// prism2-elastic with a reeled cable and a scripted sinusoidal load, and the dropped
+/// icosahedron lowered from 0.3 m to 5 mm into its ground, so that its contacts push.
+pub(super) fn reeled_and_dropped() -> [crate::scene::Scene; 2] {
+    let mut reeled = crate::scene::Scene::from_toml_str(
+        &(builtin("prism2-elastic").unwrap().to_toml_string()
+            + "\n[[loads]]\nkind = \"sinusoidal\"\nnode = 7\namplitude = [1.0, 0.0, 0.0]\n\
+               frequency = 2.0\nphase = 0.5\n"),
+    )
+    .unwrap();
+    reeled.cables[9].control = Some(crate::scene::CableControl::RestLength);
+    let mut dropped = crate::scene::Scene::from_toml_str(include_str!(
+        "../../fmu/scenes/icosahedron-dropped.toml"
+    ))
+    .unwrap();
+    dropped.nodes.iter_mut().for_each(|x| x[2] -= 0.305);
+    [reeled, dropped]
+}
+
 /// The evaluation compiled for AVX2 (used where the processor has it) gives the bits of
 /// the baseline x86-64 one (whose lanes' factor still picks AVX2 itself: that one is
 /// compared in `block_cholesky`), for every kind of effect: joints side by side and force
@@ -141,19 +159,7 @@ fn the_avx2_evaluation_gives_the_portable_bits() {
     if !std::arch::is_x86_feature_detected!("avx2") {
         eprintln!("no AVX2 here: the baseline evaluation is compared with itself");
     }
-    let mut reeled = crate::scene::Scene::from_toml_str(
-        &(builtin("prism2-elastic").unwrap().to_toml_string()
-            + "\n[[loads]]\nkind = \"sinusoidal\"\nnode = 7\namplitude = [1.0, 0.0, 0.0]\n\
-               frequency = 2.0\nphase = 0.5\n"),
-    )
-    .unwrap();
-    reeled.cables[9].control = Some(crate::scene::CableControl::RestLength);
-    let mut dropped = crate::scene::Scene::from_toml_str(include_str!(
-        "../../fmu/scenes/icosahedron-dropped.toml"
-    ))
-    .unwrap();
-    // Lowered from 0.3 m to 5 mm into the ground, so that its contacts push.
-    dropped.nodes.iter_mut().for_each(|x| x[2] -= 0.305);
+    let [reeled, dropped] = reeled_and_dropped();
     let models = [
         Model::new(&builtin("tower20").unwrap()).unwrap(),
         Model::new(&builtin("prism2").unwrap()).unwrap(),

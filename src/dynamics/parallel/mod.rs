@@ -520,7 +520,8 @@ fn ends_half(
 
 /// The first λ pass over a run of bars from bar `first` on (given their end positions,
 /// velocities and forces), with `add_bar(i, b, 1/|b|²)` for each moving bar `i`: the
-/// arithmetic of [`super::bar_response`].
+/// arithmetic of [`super::bar_response`], which keeps its own loop (through this function
+/// and a closure, tower20 took 3% more instructions).
 #[inline(always)]
 #[allow(clippy::type_complexity)]
 fn first_response(

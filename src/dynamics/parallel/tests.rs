@@ -70,18 +70,7 @@ fn a_tower_gives_the_same_bits_on_two_threads() {
 /// (icosahedron-dropped, pressed into its ground, applied after both halves).
 #[test]
 fn every_effect_gives_the_same_bits_on_two_threads() {
-    let mut reeled = crate::scene::Scene::from_toml_str(
-        &(builtin("prism2-elastic").unwrap().to_toml_string()
-            + "\n[[loads]]\nkind = \"sinusoidal\"\nnode = 7\namplitude = [1.0, 0.0, 0.0]\n\
-               frequency = 2.0\nphase = 0.5\n"),
-    )
-    .unwrap();
-    reeled.cables[9].control = Some(crate::scene::CableControl::RestLength);
-    let mut dropped = crate::scene::Scene::from_toml_str(include_str!(
-        "../../../fmu/scenes/icosahedron-dropped.toml"
-    ))
-    .unwrap();
-    dropped.nodes.iter_mut().for_each(|x| x[2] -= 0.305);
+    let [reeled, dropped] = super::super::tests::reeled_and_dropped();
     for scene in [builtin("prism2").unwrap(), reeled, dropped] {
         let mut model = Model::new(&scene).unwrap();
         // Side by side the chains keep one thread.
