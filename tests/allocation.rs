@@ -16,7 +16,7 @@ fn stepping_allocates_nothing() {
 }
 
 /// A tower of 4,200 bars evaluates on two threads; neither allocates in a step (every
-/// thread is watched: the second is the library's).
+/// thread is watched: the second is the library's; this binary's one test runs alone).
 fn two_threads_allocate_nothing() {
     use tensegrity_fmu::dynamics::parallel::{Halves, MIN_BARS};
     let mut scene = tensegrity_fmu::scene::tower_scene(1400, Some(500.0), "tower");

@@ -147,7 +147,8 @@ impl Workspace {
 ///
 /// Every stage is compiled twice: for baseline x86-64 and, used where the processor has
 /// it, for AVX2 (wider registers and three-operand instructions; 7% fewer instructions on
-/// tower20). Neither fuses a multiply with an add, so both give the same bits.
+/// tower20). Neither fuses a multiply with an add, so both give the same bits. A large
+/// structure evaluates on two threads instead ([`parallel`], the baseline build).
 pub fn accelerations(
     model: &Model,
     inputs: &Inputs,
@@ -158,7 +159,8 @@ pub fn accelerations(
     acc: &mut [f64],
 ) {
     if let Some(TwoThreads(two)) = &ws.halves {
-        // The handle, not the workspace's copy (which starts a thread of its own).
+        // A second handle on the same split and thread (the workspace stays borrowable);
+        // cloning `TwoThreads` would start a thread of its own.
         let two = Arc::clone(two);
         return parallel::evaluate(model, (&two.0, &two.1), inputs, t, q, v, ws, acc);
     }

@@ -16,6 +16,8 @@ use std::time::{Duration, Instant};
 
 /// No job (the helper waits for one).
 const IDLE: u32 = 0;
+/// A caller holds the helper and is writing its job.
+const CLAIMED: u32 = 4;
 /// A job is posted (the helper runs it, the poster waits).
 const POSTED: u32 = 1;
 /// The job is done (the poster takes its result and sets `IDLE`).
@@ -75,8 +77,9 @@ impl Clone for Helper {
 
 impl Helper {
     /// Runs `a` here and `b` on the helper thread, and returns both results when both are
-    /// done; a panic in either is resumed here. Without a thread (the system refused one)
-    /// both run here, one after the other.
+    /// done; a panic in either is resumed here. Without a thread (the system refused one),
+    /// or while the helper is busy (a join from another thread, or from inside a join), both
+    /// run here, one after the other.
     pub fn join<A, B, RA, RB>(&self, a: A, b: B) -> (RA, RB)
     where
         A: FnOnce() -> RA,
@@ -87,14 +90,22 @@ impl Helper {
             return (a(), b());
         };
         let shared = &started.shared;
+        if shared
+            .state
+            .compare_exchange(IDLE, CLAIMED, Ordering::Acquire, Ordering::Relaxed)
+            .is_err()
+        {
+            return (a(), b());
+        }
         let mut slot: (Option<B>, Option<RB>) = (Some(b), None);
         unsafe fn run<B: FnOnce() -> RB, RB>(data: *mut ()) {
             let slot = &mut *(data as *mut (Option<B>, Option<RB>));
             let b = slot.0.take().expect("a job runs once");
             slot.1 = Some(b());
         }
-        // SAFETY: the helper only reads these after `POSTED`, and this frame (which owns
-        // `slot`) waits for `DONE` before it returns, even if `a` panics.
+        // SAFETY: this thread claimed the helper; the helper only reads these after
+        // `POSTED`, and this frame (which owns `slot`) waits for `DONE` before it returns,
+        // even if `a` panics.
         unsafe {
             *shared.job.get() = Some(Job {
                 run: run::<B, RB>,
@@ -108,8 +119,8 @@ impl Helper {
         }
         let ra = catch_unwind(AssertUnwindSafe(a));
         wait_until(&shared.state, |s| s != POSTED);
-        shared.state.store(IDLE, Ordering::Relaxed);
         let helper_panic = shared.panic.lock().map(|mut p| p.take()).unwrap_or(None);
+        shared.state.store(IDLE, Ordering::Release);
         match (ra, helper_panic) {
             (Err(payload), _) | (Ok(_), Some(payload)) => resume_unwind(payload),
             (Ok(ra), None) => (ra, slot.1.expect("the job ran")),
@@ -178,7 +189,8 @@ fn serve(shared: &Shared) {
 }
 
 /// Returns once `state` satisfies `ready`: spins for [`SPIN`], then sleeps until woken
-/// (parking may wake spuriously, so it checks again).
+/// (every change this waits for is followed by an unpark, whose token a later park
+/// consumes, so no wake-up is lost; parking may also wake spuriously, so it checks again).
 fn wait_until(state: &AtomicU32, ready: impl Fn(u32) -> bool) {
     let start = Instant::now();
     let mut spins = 0u32;
@@ -187,7 +199,7 @@ fn wait_until(state: &AtomicU32, ready: impl Fn(u32) -> bool) {
             spins = spins.saturating_add(1);
             std::hint::spin_loop();
         } else {
-            std::thread::park_timeout(Duration::from_millis(10));
+            std::thread::park();
         }
     }
 }
@@ -230,19 +242,60 @@ mod tests {
         assert_eq!(helper.join(|| 3, || 4), (3, 4));
     }
 
-    /// Dropping the helper joins its thread (nothing is left running).
+    /// Dropping the helper joins its thread: the thread's share of the state is gone
+    /// when the drop returns.
     #[test]
     fn dropping_joins_the_thread() {
         let helper = Helper::default();
         assert_eq!(helper.join(|| 1, || 2), (1, 2));
-        let started = helper
-            .started
-            .get()
-            .and_then(Option::as_ref)
-            .expect("started");
-        let handle = started.thread.as_ref().expect("a thread").thread().clone();
+        let started = helper.started.get().and_then(Option::as_ref);
+        let state = Arc::downgrade(&started.expect("started").shared);
         drop(helper);
-        // A joined thread's handle can still be unparked; the thread is gone.
-        handle.unpark();
+        assert!(
+            state.upgrade().is_none(),
+            "the thread still holds its state"
+        );
+    }
+
+    /// A panic in the caller's half waits for the helper's half (whose closure borrows the
+    /// caller's frame) before it is resumed.
+    #[test]
+    fn a_panic_here_waits_for_the_helper() {
+        use std::sync::atomic::AtomicBool;
+        let helper = Helper::default();
+        let done = AtomicBool::new(false);
+        let caught = catch_unwind(AssertUnwindSafe(|| {
+            helper.join(
+                || -> u32 { panic!("here") },
+                || {
+                    std::thread::sleep(Duration::from_millis(50));
+                    done.store(true, Ordering::SeqCst);
+                },
+            )
+        }));
+        assert!(caught.is_err());
+        assert!(
+            done.load(Ordering::SeqCst),
+            "resumed before the helper finished"
+        );
+    }
+
+    /// Joins from two threads at once, or from inside a join, run safely (the second one on
+    /// its caller's thread) and give every result.
+    #[test]
+    fn concurrent_and_nested_joins_are_safe() {
+        let helper = Helper::default();
+        std::thread::scope(|scope| {
+            for t in 0..2u64 {
+                let helper = &helper;
+                scope.spawn(move || {
+                    for k in 0..2000u64 {
+                        assert_eq!(helper.join(|| k + t, || k * 2 + t), (k + t, k * 2 + t));
+                    }
+                });
+            }
+        });
+        let nested = helper.join(|| helper.join(|| 1, || 2), || 3);
+        assert_eq!(nested, ((1, 2), 3));
     }
 }

@@ -2,8 +2,11 @@
 //!
 //! Each stage's items are split in two halves, one run on the calling thread and one on
 //! the workspace's [`Helper`]: ends, nodes and bars by index, forces by the ends they act
-//! on, K's blocks by the bars that set them, and the reactions by the connected components
-//! of K (a tower's three chains of joints), which factor independently. An item's arithmetic is the one-thread evaluation's, and every sum
+//! on, K's blocks by the bars that set them, the reactions' right-hand side and their
+//! addition to the end forces by constraint columns at a seam across which no end is
+//! shared, and the factor by the connected components of K (a tower's three chains of
+//! joints), which factor independently. The halves run the baseline x86-64 build of the
+//! stages (the one-thread evaluation picks AVX2 where it can; the bits are the same). An item's arithmetic is the one-thread evaluation's, and every sum
 //! keeps its order: where both halves add to one value (a block of K at the seam, the
 //! acceleration of a node the seam's two bars share), the second half's terms wait until
 //! both halves are done and are added in order after them. So the results are the same
@@ -61,8 +64,13 @@ pub struct Halves {
 
 impl Halves {
     /// The split of `model`'s evaluation, if it has at least `min_bars` bars and its layout
-    /// allows one: the sparse joint/pin basis, K (if any) sparse with the scalar factor,
-    /// and constraint columns of different components acting on different ends.
+    /// allows one: the sparse joint/pin basis, K (if any) sparse with the scalar factor, and
+    /// ground contact (which runs after both halves) last among the forces.
+    ///
+    /// Numberings: `columns` are in the reaction system's (K's), `even` in the
+    /// coordinates'. The one-thread path adds Ω to the ends in the system's order and the
+    /// halves in the coordinates'; they agree because the columns sharing an end share a
+    /// bar, so lie in one component, whose order the system keeps.
     pub fn new(model: &Model, min_bars: usize) -> Option<Self> {
         let n_bars = model.bars.len();
         let single = model.coords.single.as_ref()?;
@@ -253,8 +261,8 @@ fn split_components(chol: &BlockLdl) -> [Vec<usize>; 2] {
 struct Disjoint<T>(*mut T);
 
 // SAFETY: the writers keep to disjoint indices (see each use).
-unsafe impl<T> Send for Disjoint<T> {}
-unsafe impl<T> Sync for Disjoint<T> {}
+unsafe impl<T: Send> Send for Disjoint<T> {}
+unsafe impl<T: Send> Sync for Disjoint<T> {}
 
 impl<T> Disjoint<T> {
     fn new(slice: &mut [T]) -> Self {
@@ -314,6 +322,18 @@ pub(super) fn evaluate(
     let coords = &model.coords;
     let single = coords.single.as_deref().expect("the sparse basis");
     let (b, e) = (halves.bars, 2 * halves.bars);
+    // The halves write through raw pointers: the lengths they index are checked here once.
+    assert_eq!(
+        acc.len(),
+        3 * coords.r,
+        "accelerations of every reduced node"
+    );
+    assert_eq!(ws.end_force.len(), coords.n_ends(), "a force per end");
+    assert_eq!(
+        ws.gamma.len(),
+        model.cables.len(),
+        "a force density per cable"
+    );
     {
         // Stage 1: kinematics (and the zeroing of the end forces and accelerations).
         {

@@ -381,7 +381,7 @@ impl BlockLdl {
 
     /// The scalar factor's arrays for writers on two threads (see [`SharedFactor`]).
     pub(crate) fn shared(&mut self) -> SharedFactor<'_> {
-        debug_assert!(self.lanes.is_none(), "K is in the lanes");
+        assert!(self.lanes.is_none(), "K is in the lanes");
         SharedFactor {
             k: self.k_values.as_mut_ptr(),
             d_inv: self.d_inv.as_mut_ptr(),
