@@ -7,7 +7,7 @@ use tensegrity_fmu::scene::{builtin, tower_scene, Scene};
 use tensegrity_fmu::{Model, Simulation};
 
 /// Step size of every measured run, s.
-pub const STEP: f64 = 1e-3;
+const STEP: f64 = 1e-3;
 
 /// `scene` stepped by rk4 at [`STEP`], the method and step these benchmarks time (the
 /// scenes' own default is the adaptive dopri5).
@@ -15,6 +15,19 @@ pub fn with_rk4(mut scene: Scene) -> Scene {
     scene.solver.method = Method::Rk4;
     scene.solver.step_size = STEP;
     scene
+}
+
+/// µs per step of `sim` at [`STEP`] over at least `seconds` (and 20 steps), after 10 steps
+/// of warm-up.
+pub fn us_per_step(sim: &mut Simulation, seconds: f64) -> Result<f64, String> {
+    sim.advance(10, STEP).map_err(|e| e.to_string())?;
+    let started = Instant::now();
+    let mut steps = 0u64;
+    while started.elapsed().as_secs_f64() < seconds || steps < 20 {
+        sim.advance(10, STEP).map_err(|e| e.to_string())?;
+        steps += 10;
+    }
+    Ok(started.elapsed().as_secs_f64() * 1e6 / steps as f64)
 }
 
 /// A tower of `k` stages with elastic cables at 98% of their lengths (explicit rest lengths:
@@ -44,16 +57,7 @@ pub fn scaling(stages: &[usize], seconds: f64) -> Result<(), String> {
         let model = Model::new(&scene).map_err(|e| e.to_string())?;
         let build_ms = started.elapsed().as_secs_f64() * 1e3;
         let bars = model.bars.len();
-        let h = STEP;
-        let mut sim = Simulation::new(model);
-        sim.advance(10, h).map_err(|e| e.to_string())?;
-        let started = Instant::now();
-        let mut steps = 0u64;
-        while started.elapsed().as_secs_f64() < seconds || steps < 20 {
-            sim.advance(10, h).map_err(|e| e.to_string())?;
-            steps += 10;
-        }
-        let us = started.elapsed().as_secs_f64() * 1e6 / steps as f64;
+        let us = us_per_step(&mut Simulation::new(model), seconds)?;
         let per_bar = us / bars as f64;
         let ratio = per_bar / *base.get_or_insert(per_bar);
         println!("| {k} | {bars} | {build_ms:.1} | {us:.1} | {per_bar:.3} | {ratio:.2} |");

@@ -2,11 +2,9 @@
 //! on two, measured in alternation in one process (this machine's speed drifts, so each
 //! round's ratio is taken, and their median printed).
 
-use std::time::Instant;
-
 use tensegrity_fmu::{Model, Simulation};
 
-use super::bench::{tower, STEP};
+use super::bench::{tower, us_per_step};
 
 /// Prints, per tower height, µs per step on one thread and on two (the fastest round of
 /// each) and the median of the rounds' ratios.
@@ -22,7 +20,10 @@ pub fn run(stages: &[usize], seconds: f64, rounds: usize) -> Result<(), String> 
         two.use_two_threads(true);
         let (mut best, mut ratios) = ([f64::INFINITY; 2], Vec::new());
         for _ in 0..rounds.max(1) {
-            let t = [time(&mut one, seconds)?, time(&mut two, seconds)?];
+            let t = [
+                us_per_step(&mut one, seconds)?,
+                us_per_step(&mut two, seconds)?,
+            ];
             best = [best[0].min(t[0]), best[1].min(t[1])];
             ratios.push(t[1] / t[0]);
         }
@@ -34,16 +35,4 @@ pub fn run(stages: &[usize], seconds: f64, rounds: usize) -> Result<(), String> 
         );
     }
     Ok(())
-}
-
-/// µs per step of `sim` over at least `seconds` (and 20 steps).
-fn time(sim: &mut Simulation, seconds: f64) -> Result<f64, String> {
-    sim.advance(10, STEP).map_err(|e| e.to_string())?;
-    let started = Instant::now();
-    let mut steps = 0u64;
-    while started.elapsed().as_secs_f64() < seconds || steps < 20 {
-        sim.advance(10, STEP).map_err(|e| e.to_string())?;
-        steps += 10;
-    }
-    Ok(started.elapsed().as_secs_f64() * 1e6 / steps as f64)
 }
