@@ -426,6 +426,16 @@ fn pairs_mut(ends: &mut [Vector3<f64>]) -> &mut [[Vector3<f64>; 2]] {
     ends.as_chunks_mut::<2>().0
 }
 
+/// K assembled again from the bar vectors [`bar_response`] kept (the same arithmetic, so
+/// the same K), after a factor overwrote it. A static bar's entry is never set, but it has
+/// no blocks either: `add_bar` returns.
+fn assemble_kept(r: &mut Reactions, bars: &[BarKept]) {
+    r.clear();
+    for (i, (bv, _, _)) in bars.iter().enumerate() {
+        r.add_bar(i, bv, 1.0 / bv.norm_squared());
+    }
+}
+
 /// Stage 4: reactions Ω from `N̈ P = 0` (K assembled by [`bar_response`]), added to the end
 /// forces.
 #[inline(always)]
@@ -435,12 +445,8 @@ fn add_reactions(ws: &mut Workspace) {
     // [`bar_response`] kept and the end accelerations (the same arithmetic, so the same
     // system).
     let (bars, end_acc) = (&ws.bars, &ws.end_acc);
-    // A static bar's entry is never set, but it has no blocks either: `add_bar` returns.
     let assemble_again = |r: &mut Reactions| {
-        r.clear();
-        for (i, (bv, _, _)) in bars.iter().enumerate() {
-            r.add_bar(i, bv, 1.0 / bv.norm_squared());
-        }
+        assemble_kept(r, bars);
         r.set_rhs(end_acc);
     };
     if !ws.reactions.solve(assemble_again) {

@@ -473,10 +473,7 @@ pub(super) fn evaluate(
                 // A self-stressed frame: K again from the kept bar vectors (the factor
                 // overwrote it), then the one-thread path, which fails the same way and
                 // takes the dense solve.
-                ws.reactions.clear();
-                for (i, (bv, _, _)) in ws.bars.iter().enumerate() {
-                    ws.reactions.add_bar(i, bv, 1.0 / bv.norm_squared());
-                }
+                super::assemble_kept(&mut ws.reactions, &ws.bars);
                 super::add_reactions(ws);
             }
             // Stage 5: λ and the end accelerations again, and their scatter.
