@@ -103,6 +103,30 @@ impl Workspace {
         self.halves.is_some()
     }
 
+    /// Runs `f(start, part)` over `out` in two halves, on this thread and the evaluation's
+    /// second one, when evaluations run on two threads (else over the whole at once). For
+    /// loops over independent items, which give the same bits either way: at the sizes that
+    /// take two threads such a loop streams from memory, and two cores draw about twice
+    /// what one does.
+    pub fn split_mut<T: Send>(&self, out: &mut [T], f: impl Fn(usize, &mut [T]) + Sync) {
+        match &self.halves {
+            Some(two) => {
+                let mid = out.len() / 2;
+                let (first, second) = out.split_at_mut(mid);
+                two.0 .1.join(|| f(0, first), || f(mid, second));
+            }
+            None => f(0, out),
+        }
+    }
+
+    /// `to.copy_from_slice(from)`, in halves as [`Self::split_mut`] runs them.
+    pub fn copy(&self, to: &mut [f64], from: &[f64]) {
+        assert_eq!(to.len(), from.len(), "copies of one length");
+        self.split_mut(to, |start, to| {
+            to.copy_from_slice(&from[start..start + to.len()]);
+        });
+    }
+
     /// Ω of constraint column `c` from the last evaluation (zero without reactions), N.
     pub fn reaction_solution(&self, c: usize) -> Vector3<f64> {
         if self.reactions.size() == 0 {

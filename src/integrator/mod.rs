@@ -23,6 +23,12 @@ pub trait Rhs {
     /// of `before` (the start of the step), adding the displacement to `moved`; a no-op
     /// when the correction is off.
     fn project_positions(&mut self, _y: &mut [f64], _before: &[f64], _moved: &mut [f64]) {}
+    /// Runs `f(start, part)` over parts of `out` that together make it, perhaps on several
+    /// threads at once (the evaluation's, for large structures); for loops over independent
+    /// entries, whose results do not depend on the split.
+    fn split_mut(&self, out: &mut [f64], f: &(dyn Fn(usize, &mut [f64]) + Sync)) {
+        f(0, out);
+    }
     /// `∂a/∂q` and `∂a/∂v` of the accelerations (the second half of `f`) at `(t, y)`, each
     /// `n/2 × n/2`, for implicit methods; `None` where there is no tangent.
     fn jacobian(&mut self, _t: f64, _y: &[f64]) -> Option<(DMatrix<f64>, DMatrix<f64>)> {

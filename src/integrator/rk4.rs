@@ -21,25 +21,35 @@ impl Rk4 {
     }
 }
 
+/// `stage = y + c k`, entry by entry (split over threads where the evaluation has two).
+fn set_stage(rhs: &dyn Rhs, stage: &mut [f64], y: &[f64], c: f64, k: &[f64]) {
+    rhs.split_mut(stage, &|start, s| {
+        let part = start..start + s.len();
+        for ((s, y), k) in s.iter_mut().zip(&y[part.clone()]).zip(&k[part]) {
+            *s = y + c * k;
+        }
+    });
+}
+
 impl Integrator for Rk4 {
     fn attempt(&mut self, rhs: &mut dyn Rhs, t: f64, y: &mut [f64], h: f64) -> Outcome {
         let [k1, k2, k3, k4] = &mut self.k;
         rhs.eval(t, y, k1);
-        for ((s, y), k) in self.stage.iter_mut().zip(y.iter()).zip(k1.iter()) {
-            *s = y + 0.5 * h * k;
-        }
+        set_stage(rhs, &mut self.stage, y, 0.5 * h, k1);
         rhs.eval(t + 0.5 * h, &self.stage, k2);
-        for ((s, y), k) in self.stage.iter_mut().zip(y.iter()).zip(k2.iter()) {
-            *s = y + 0.5 * h * k;
-        }
+        set_stage(rhs, &mut self.stage, y, 0.5 * h, k2);
         rhs.eval(t + 0.5 * h, &self.stage, k3);
-        for ((s, y), k) in self.stage.iter_mut().zip(y.iter()).zip(k3.iter()) {
-            *s = y + h * k;
-        }
+        set_stage(rhs, &mut self.stage, y, h, k3);
         rhs.eval(t + h, &self.stage, k4);
-        for (i, y) in y.iter_mut().enumerate() {
-            *y += h / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i]);
-        }
+        let (k1, k2, k3, k4) = (&*k1, &*k2, &*k3, &*k4);
+        rhs.split_mut(y, &|start, y| {
+            let part = start..start + y.len();
+            let k12 = k1[part.clone()].iter().zip(&k2[part.clone()]);
+            let k34 = k3[part.clone()].iter().zip(&k4[part]);
+            for (y, ((a, b), (c, d))) in y.iter_mut().zip(k12.zip(k34)) {
+                *y += h / 6.0 * (a + 2.0 * b + 2.0 * c + d);
+            }
+        });
         self.evaluations += 4;
         Outcome::Accepted { next: h }
     }

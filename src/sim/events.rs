@@ -13,7 +13,7 @@
 
 use nalgebra::Vector3;
 
-use crate::dynamics::Inputs;
+use crate::dynamics::{Inputs, Workspace};
 use crate::model::effects::{CableLink, ForceEffect};
 use crate::model::Model;
 
@@ -156,16 +156,14 @@ impl Events {
 
     /// Notes the state a step starts from: copies it and takes the switches' signs there
     /// (from the last step's end when that is this state, with the same inputs).
-    pub fn start(&mut self, model: &Model, inputs: &Inputs, y: &[f64]) {
-        self.y0.copy_from_slice(y);
+    pub fn start(&mut self, model: &Model, inputs: &Inputs, y: &[f64], ws: &Workspace) {
+        ws.copy(&mut self.y0, y);
         if self.end_known && self.y1 == y && self.rest1 == inputs.rest_length {
             std::mem::swap(&mut self.x0, &mut self.x1);
             std::mem::swap(&mut self.positive0, &mut self.positive1);
         } else {
-            end_positions(model, y, &mut self.x0);
-            for (p, s) in self.positive0.iter_mut().zip(&self.switches) {
-                *p = positive(s, inputs, &self.x0);
-            }
+            end_positions(model, y, &mut self.x0, ws);
+            signs(&self.switches, inputs, &self.x0, &mut self.positive0, ws);
         }
         self.end_known = false;
     }
@@ -173,11 +171,16 @@ impl Events {
     /// After a step of `h` from the noted start to `y`: the time from the start of the
     /// earliest sign change of a switching function that lies inside the step (not
     /// within [`EDGE`] of either end), if any. The time returned is just past the crossing.
-    pub fn locate(&mut self, model: &Model, inputs: &Inputs, y: &[f64], h: f64) -> Option<f64> {
-        end_positions(model, y, &mut self.x1);
-        for (p, s) in self.positive1.iter_mut().zip(&self.switches) {
-            *p = positive(s, inputs, &self.x1);
-        }
+    pub fn locate(
+        &mut self,
+        model: &Model,
+        inputs: &Inputs,
+        y: &[f64],
+        h: f64,
+        ws: &Workspace,
+    ) -> Option<f64> {
+        end_positions(model, y, &mut self.x1, ws);
+        signs(&self.switches, inputs, &self.x1, &mut self.positive1, ws);
         let (lo, hi) = (EDGE * h, (1.0 - EDGE) * h);
         let mut earliest: Option<f64> = None;
         let mut velocities = false;
@@ -198,7 +201,7 @@ impl Events {
             }
         }
         if earliest.is_none() {
-            self.y1.copy_from_slice(y);
+            ws.copy(&mut self.y1, y);
             self.rest1.copy_from_slice(&inputs.rest_length);
             self.end_known = true;
         }
@@ -270,12 +273,30 @@ impl Events {
     }
 }
 
-/// Bar-end positions of the state `y = [q; q̇]`.
-fn end_positions(model: &Model, y: &[f64], x: &mut [Vector3<f64>]) {
+/// Bar-end positions of the state `y = [q; q̇]` (on two threads where the evaluation has
+/// them: the ends are independent).
+fn end_positions(model: &Model, y: &[f64], x: &mut [Vector3<f64>], ws: &Workspace) {
     let q = &y[..y.len() / 2];
-    for (e, x) in x.iter_mut().enumerate() {
-        *x = model.coords.end_vector(e, q, true);
-    }
+    ws.split_mut(x, |start, x| {
+        for (e, x) in (start..).zip(x) {
+            *x = model.coords.end_vector(e, q, true);
+        }
+    });
+}
+
+/// Whether each switch is positive at the bar-end positions `x` (as [`end_positions`]).
+fn signs(
+    switches: &[Switch],
+    inputs: &Inputs,
+    x: &[Vector3<f64>],
+    out: &mut [bool],
+    ws: &Workspace,
+) {
+    ws.split_mut(out, |start, out| {
+        for (p, s) in out.iter_mut().zip(&switches[start..]) {
+            *p = positive(s, inputs, x);
+        }
+    });
 }
 
 /// Bar-end velocities of the reduced velocities `qd`.

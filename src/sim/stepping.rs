@@ -40,7 +40,7 @@ impl Simulation {
         self.check_inputs()?;
         self.check_step_stability()?;
         self.note_input_changes();
-        self.last_good.copy_from_slice(&self.state.y);
+        self.ws.copy(&mut self.last_good, &self.state.y);
         self.attempt_located(t, h)?;
         self.state.time = t_next;
         Ok(())
@@ -100,7 +100,7 @@ impl Simulation {
             } else {
                 rest
             };
-            self.last_good.copy_from_slice(&self.state.y);
+            self.ws.copy(&mut self.last_good, &self.state.y);
             self.attempt_located(t0, h)?;
             self.state.time = t1;
         }
@@ -135,19 +135,23 @@ impl Simulation {
                 });
             }
             attempts += 1;
-            self.last_good.copy_from_slice(&self.state.y);
+            self.ws.copy(&mut self.last_good, &self.state.y);
             if locate {
-                self.events.start(&self.model, &self.inputs, &self.state.y);
+                self.events
+                    .start(&self.model, &self.inputs, &self.state.y, &self.ws);
             }
             match self.attempt(t, h)? {
                 Outcome::Accepted { next } => {
                     // A step clipped at an event is not checked again: its end lies just
                     // past the switch, and a second look could only clip it ever shorter.
                     if locate && resume.is_none() {
-                        if let Some(theta) =
-                            self.events
-                                .locate(&self.model, &self.inputs, &self.state.y, h)
-                        {
+                        if let Some(theta) = self.events.locate(
+                            &self.model,
+                            &self.inputs,
+                            &self.state.y,
+                            h,
+                            &self.ws,
+                        ) {
                             // Redo the step, clipped to end just past the switch.
                             self.discard_trial();
                             self.stats.events += 1;
@@ -184,14 +188,15 @@ impl Simulation {
         let end = t + h;
         let (mut t0, mut rest) = (t, h);
         for split in 0..=events::MAX_SPLITS {
-            self.events.start(&self.model, &self.inputs, &self.state.y);
+            self.events
+                .start(&self.model, &self.inputs, &self.state.y, &self.ws);
             self.attempt(t0, rest)?;
             if split == events::MAX_SPLITS {
                 break;
             }
-            let Some(theta) = self
-                .events
-                .locate(&self.model, &self.inputs, &self.state.y, rest)
+            let Some(theta) =
+                self.events
+                    .locate(&self.model, &self.inputs, &self.state.y, rest, &self.ws)
             else {
                 break;
             };
