@@ -29,8 +29,8 @@ pub struct BlockLdl {
     n: usize,
     /// K's lower blocks in L's layout (fill slots zero), set by the caller through
     /// [`Self::put_symmetric`] at [`Self::k_index`]; the scalar factorization overwrites them with
-    /// the Schur complement's blocks: `L_ik D_k` below the diagonal, for the updates of
-    /// later columns, and `D_k` on it. One array, so an evaluation streams K once (it
+    /// the Schur complement's blocks `L_ik D_k` below the diagonal, for the updates of
+    /// later columns (`D_k` itself is not stored, only its inverse). One array, so an evaluation streams K once (it
     /// matters for large structures). L itself is not kept: `L_ik = (L_ik D_k) D_k⁻¹` is
     /// multiplied out where it is used, the same product as when it was stored, so the
     /// same bits, and 144 B less memory traffic per block column. Empty when the lanes
@@ -116,18 +116,21 @@ impl SharedFactor<'_> {
         let pattern = self.pattern;
         for k in columns {
             let diagonal = pattern.l_start[k];
+            // The pivot block is updated here and never stored: only its inverse is used
+            // later, so K's lines of a chain without fill are read and not written back
+            // (at 60,000 bars the factor is bound by memory).
+            let mut pivot = *self.k.add(diagonal);
             for u in &pattern.updates[pattern.update_start[k]..pattern.update_start[k + 1]] {
                 let l = self.l(u.source, u.column);
                 let ld = *self.k.add(u.with);
-                let target = &mut *self.k.add(u.target);
                 if u.target == diagonal {
                     // Only the lower triangle of a pivot block is read.
-                    subtract_lower_abt(target, &l, &ld);
+                    subtract_lower_abt(&mut pivot, &l, &ld);
                 } else {
-                    subtract_abt(target, &l, &ld);
+                    subtract_abt(&mut *self.k.add(u.target), &l, &ld);
                 }
             }
-            let Some(d_inv) = inverse3(&*self.k.add(diagonal), tiny) else {
+            let Some(d_inv) = inverse3(&pivot, tiny) else {
                 return false;
             };
             *self.d_inv.add(k) = d_inv;
