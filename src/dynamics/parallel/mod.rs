@@ -53,6 +53,11 @@ pub struct Halves {
     deferred_bars: Vec<usize>,
     /// Each thread's constraint columns to factor: whole components of K, in order.
     columns: [Vec<usize>; 2],
+    /// The first thread's last columns (its last component) whose backward substitution
+    /// the second thread runs, once the first has factored them (0 if none): the factor
+    /// is bound by memory, so a thread with two of the tower's three chains hands the
+    /// second one's backward pass to the thread with one.
+    handoff: usize,
     /// Constraint columns `[0, even)` are the first thread's for the right-hand side and
     /// the addition of Ω to the end forces (half of them, acting on ends of their own).
     even: usize,
@@ -95,6 +100,7 @@ impl Halves {
         let mut deferred = vec![false; n_contributions];
         let mut deferred_bars = Vec::new();
         let mut columns = [Vec::new(), Vec::new()];
+        let mut handoff = 0;
         let mut even = 0;
         if let Some(chol) = chol {
             let mut first_half = vec![false; chol.slots()];
@@ -109,7 +115,7 @@ impl Halves {
                     deferred_bars.push(b);
                 }
             }
-            columns = split_components(chol);
+            (columns, handoff) = split_components(chol);
             even = seam(
                 chol.size(),
                 |c| reactions.column_terms(c),
@@ -138,6 +144,7 @@ impl Halves {
             deferred,
             deferred_bars,
             columns,
+            handoff,
             even,
             late,
             late_ends,
@@ -241,19 +248,75 @@ fn seam<'a>(n: usize, terms: impl Fn(usize) -> &'a [(usize, f64)], n_ends: usize
 }
 
 /// K's components shared between the threads, the largest first to the thread with fewer
-/// columns; each thread's columns in order.
-fn split_components(chol: &BlockLdl) -> [Vec<usize>; 2] {
+/// columns; each thread's columns in order. With the handoff: the number of the first
+/// thread's last columns whose backward substitution the second runs (its last component,
+/// if it has more columns than the second and more than one component).
+fn split_components(chol: &BlockLdl) -> ([Vec<usize>; 2], usize) {
     let mut components = chol.components();
     components.sort_by_key(|c| std::cmp::Reverse(c.len()));
-    let mut columns = [Vec::new(), Vec::new()];
+    let mut split = [Vec::new(), Vec::new()];
     for component in components {
-        let t = usize::from(columns[1].len() < columns[0].len());
-        columns[t].extend(component);
+        let sizes = split
+            .each_ref()
+            .map(|c: &Vec<Vec<usize>>| c.iter().map(Vec::len).sum::<usize>());
+        split[usize::from(sizes[1] < sizes[0])].push(component);
     }
-    for c in &mut columns {
-        c.sort_unstable();
+    for components in &mut split {
+        components.sort_unstable_by_key(|c| c[0]);
     }
-    columns
+    let sizes = split
+        .each_ref()
+        .map(|c| c.iter().map(Vec::len).sum::<usize>());
+    let handoff = match split[0].last() {
+        Some(last) if split[0].len() > 1 && sizes[0] > sizes[1] => last.len(),
+        _ => 0,
+    };
+    (split.map(|c| c.concat()), handoff)
+}
+
+/// The first thread's word that the columns it hands off are factored (and how).
+#[derive(Default)]
+struct Handoff(std::sync::atomic::AtomicU8);
+
+/// Sends its outcome once; a failure if dropped unsent (a panic), so the waiter ends.
+struct Signal<'a>(Option<&'a Handoff>);
+
+const PENDING: u8 = 0;
+const FACTORED: u8 = 1;
+const FAILED: u8 = 2;
+
+impl Handoff {
+    fn signal(&self) -> Signal<'_> {
+        Signal(Some(self))
+    }
+
+    /// Waits (spinning: the other thread's factor is a fraction of a millisecond away)
+    /// for the outcome; true if the columns were factored.
+    fn wait(&self) -> bool {
+        loop {
+            match self.0.load(std::sync::atomic::Ordering::Acquire) {
+                PENDING => std::hint::spin_loop(),
+                outcome => return outcome == FACTORED,
+            }
+        }
+    }
+}
+
+impl Signal<'_> {
+    fn send(&mut self, factored: bool) {
+        if let Some(handoff) = self.0.take() {
+            let outcome = if factored { FACTORED } else { FAILED };
+            handoff
+                .0
+                .store(outcome, std::sync::atomic::Ordering::Release);
+        }
+    }
+}
+
+impl Drop for Signal<'_> {
+    fn drop(&mut self) {
+        self.send(false);
+    }
 }
 
 /// A slice two threads write at disjoint indices.
@@ -456,10 +519,32 @@ pub(super) fn evaluate(
                 let rhs = |side: usize| unsafe { shared.set_rhs(halves_of(side), end_acc) };
                 helper.join(|| rhs(0), || rhs(1));
                 let tiny = BlockLdl::singular_below(scale);
-                // SAFETY: components share no slot, pivot or right-hand side entry.
-                let solve =
-                    |side: usize| unsafe { shared.factor_and_solve(&halves.columns[side], tiny) };
-                let (ok0, ok1) = helper.join(|| solve(0), || solve(1));
+                let (own, handed) =
+                    halves.columns[0].split_at(halves.columns[0].len() - halves.handoff);
+                let factored = Handoff::default();
+                // SAFETY: components share no slot, pivot or right-hand side entry; the
+                // handed-off columns' backward substitution waits for their factor.
+                let (ok0, ok1) = helper.join(
+                    || unsafe {
+                        let mut signal = factored.signal();
+                        let ok = shared.factor(&halves.columns[0], tiny);
+                        signal.send(ok);
+                        if ok {
+                            shared.solve_back(own);
+                        }
+                        ok
+                    },
+                    || unsafe {
+                        let ok = shared.factor(&halves.columns[1], tiny);
+                        if ok {
+                            shared.solve_back(&halves.columns[1]);
+                        }
+                        if !handed.is_empty() && factored.wait() {
+                            shared.solve_back(handed);
+                        }
+                        ok
+                    },
+                );
                 if ok0 && ok1 {
                     let end_force = Disjoint::new(&mut ws.end_force);
                     // SAFETY: the two threads' columns act on different ends (`Halves::new`).

@@ -96,6 +96,10 @@ fn a_tower_gives_the_same_bits_on_two_threads() {
         [60, 30],
         "two chains and one"
     );
+    assert_eq!(
+        halves.handoff, 30,
+        "the second chain's backward substitution handed to the other thread"
+    );
 }
 
 /// Every other kind of effect: controlled cables (prism2), a reeled cable and a scripted
@@ -127,6 +131,10 @@ fn a_failed_factor_on_two_threads_falls_back_as_on_one() {
     model.reactions = Reactions::new(&model.coords, &model.inertia, false).without_lanes();
     let seen = same_bits_on_two_threads(&model, &Inputs::start(&model));
     assert!(seen.halves.columns.iter().all(|c| !c.is_empty()));
+    assert!(
+        seen.halves.handoff > 0,
+        "a failed factor with a handoff waiting on it"
+    );
     assert_eq!(
         seen.fallbacks, 6,
         "the sparse factor fails in every evaluation"

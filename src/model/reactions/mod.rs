@@ -468,20 +468,26 @@ impl SharedReactions<'_> {
         }
     }
 
-    /// Factors `columns` (whole components, in order) and solves for their Ω, pivots
-    /// tested against `tiny`; false if one fails.
+    /// Factors `columns` (whole components, in order) and runs their forward
+    /// substitution, pivots tested against `tiny`; false if one fails.
     ///
     /// # Safety
     /// No other thread touches these columns' components meanwhile.
     #[inline(always)]
-    pub unsafe fn factor_and_solve(&self, columns: &[usize], tiny: f64) -> bool {
-        let ok = self
-            .factor
-            .factor_columns(columns.iter().copied(), tiny, self.rhs);
-        if ok {
-            self.factor.solve_back(columns.iter().copied(), self.rhs);
-        }
-        ok
+    pub unsafe fn factor(&self, columns: &[usize], tiny: f64) -> bool {
+        self.factor
+            .factor_columns(columns.iter().copied(), tiny, self.rhs)
+    }
+
+    /// The backward substitution of `columns` after [`Self::factor`] succeeded on them:
+    /// their Ω.
+    ///
+    /// # Safety
+    /// As for [`Self::factor`]; the factor's writes to these columns happened before (on
+    /// this thread, or published to it).
+    #[inline(always)]
+    pub unsafe fn solve_back(&self, columns: &[usize]) {
+        self.factor.solve_back(columns.iter().copied(), self.rhs);
     }
 
     /// Adds the solved reactions of `columns` to the end forces, as [`Reactions::add_to`]
