@@ -16,7 +16,7 @@ const ROUND_OFF: f64 = 1e-14;
 #[derive(Debug, Clone)]
 pub struct CorrectionPlan {
     /// Per bar, `q_i` as sparse `(g, value)` pairs; empty for a skipped bar.
-    pub(crate) directions: Vec<Vec<(usize, f64)>>,
+    pub(crate) directions: Directions,
     /// Nominal bar lengths l_i, m.
     pub(crate) lengths: Vec<f64>,
     /// Bars (0-based) whose correction direction vanishes.
@@ -106,7 +106,7 @@ impl CorrectionPlan {
             Vec::new()
         };
         Self {
-            directions,
+            directions: Directions::new(&directions),
             lengths: lengths.to_vec(),
             skipped,
             loop_patterns,
@@ -115,6 +115,33 @@ impl CorrectionPlan {
 
     /// Number of nonzeros over all directions (the correction's cost per pass).
     pub fn nnz(&self) -> usize {
-        self.directions.iter().map(Vec::len).sum()
+        self.directions.terms.len()
+    }
+}
+
+/// Per bar, its direction's `(g, value)` pairs, all in one array (the correction walks
+/// them in order every step: one stream, not a heap block per bar).
+#[derive(Debug, Clone)]
+pub(crate) struct Directions {
+    start: Vec<usize>,
+    terms: Vec<(usize, f64)>,
+}
+
+impl Directions {
+    fn new(per_bar: &[Vec<(usize, f64)>]) -> Self {
+        let mut start = Vec::with_capacity(per_bar.len() + 1);
+        start.push(0);
+        let mut terms = Vec::with_capacity(per_bar.iter().map(Vec::len).sum());
+        for direction in per_bar {
+            terms.extend_from_slice(direction);
+            start.push(terms.len());
+        }
+        Self { start, terms }
+    }
+
+    /// Each bar's direction, in bar order.
+    #[inline(always)]
+    pub fn iter(&self) -> impl Iterator<Item = &[(usize, f64)]> {
+        self.start.windows(2).map(|w| &self.terms[w[0]..w[1]])
     }
 }
