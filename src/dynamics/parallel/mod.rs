@@ -5,7 +5,8 @@
 //! on, K's blocks by the bars that set them, the reactions' right-hand side and their
 //! addition to the end forces by constraint columns at a seam across which no end is
 //! shared, and the factor by the connected components of K (a tower's three chains of
-//! joints), which factor independently. The halves run the baseline x86-64 build of the
+//! joints), which factor independently (the thread with more of them hands its last one's
+//! backward substitution to the other). The halves run the baseline x86-64 build of the
 //! stages (the one-thread evaluation picks AVX2 where it can; the bits are the same). An item's arithmetic is the one-thread evaluation's, and every sum
 //! keeps its order: where both halves add to one value (a block of K at the seam, the
 //! acceleration of a node the seam's two bars share), the second half's terms wait until
