@@ -47,9 +47,9 @@ pub fn tower(k: usize) -> Scene {
 }
 
 /// Prints one row per tower height: the fastest round's µs per step, and the ratio of µs
-/// per bar-step to the smallest tower's. This machine's speed drifts, so in each round
-/// the smallest tower is measured again right before each other one, and the row gives
-/// the median of the rounds' ratios and their range.
+/// per bar-step to the first height's. This machine's speed drifts, so in each round the
+/// first height is measured again right before each other one, and the row gives the
+/// median of the rounds' ratios (the upper middle one for an even count) and their range.
 pub fn scaling(stages: &[usize], seconds: f64, rounds: usize) -> Result<(), String> {
     let mut towers = Vec::with_capacity(stages.len());
     for &k in stages {
@@ -61,7 +61,7 @@ pub fn scaling(stages: &[usize], seconds: f64, rounds: usize) -> Result<(), Stri
     }
     let n = towers.len();
     let (mut best, mut ratios) = (vec![f64::INFINITY; n], vec![Vec::new(); n]);
-    for _ in 0..rounds.max(1) {
+    for _ in 0..rounds {
         for i in 0..n {
             let base = us_per_step(&mut towers[0].3, seconds)?;
             let us = if i == 0 {

@@ -102,10 +102,10 @@ enum Command {
         /// Minimum wall time per measurement, s.
         #[arg(long, default_value_t = 1.0)]
         seconds: f64,
-        /// Rounds over every height (the smallest tower measured again before each other
-        /// one); each row gives the fastest round and the median ratio.
-        #[arg(long, default_value_t = 3)]
-        rounds: usize,
+        /// Rounds over every height (the first measured again before each other one);
+        /// each row gives the fastest round and the median ratio to the first.
+        #[arg(long, default_value_t = 3, value_parser = clap::value_parser!(u64).range(1..))]
+        rounds: u64,
     },
     /// Draw a run: a PNG picture (at --at), a GIF animation (to --time, --fps frames per
     /// second); the format follows the extension of -o (.png, .gif, .html, .pvd).
@@ -263,7 +263,7 @@ pub fn run(cli: Cli) -> Result<(), String> {
             stages,
             seconds,
             rounds,
-        } => bench::scaling(&stages, seconds, rounds),
+        } => bench::scaling(&stages, seconds, rounds as usize),
         Command::Report { what } => report::run(what),
         Command::Modes {
             scene,

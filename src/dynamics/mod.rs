@@ -108,7 +108,7 @@ impl Workspace {
     /// loops over independent items, which give the same bits either way: at the sizes that
     /// take two threads such a loop streams from memory, and two cores draw about twice
     /// what one does.
-    pub fn split_mut<T: Send>(&self, out: &mut [T], f: impl Fn(usize, &mut [T]) + Sync) {
+    pub fn for_each_half<T: Send>(&self, out: &mut [T], f: impl Fn(usize, &mut [T]) + Sync) {
         match &self.halves {
             Some(two) => {
                 let mid = out.len() / 2;
@@ -119,10 +119,10 @@ impl Workspace {
         }
     }
 
-    /// `to.copy_from_slice(from)`, in halves as [`Self::split_mut`] runs them.
-    pub fn copy(&self, to: &mut [f64], from: &[f64]) {
+    /// `to.copy_from_slice(from)`, in halves as [`Self::for_each_half`] runs them.
+    pub fn copy_in_halves(&self, to: &mut [f64], from: &[f64]) {
         assert_eq!(to.len(), from.len(), "copies of one length");
-        self.split_mut(to, |start, to| {
+        self.for_each_half(to, |start, to| {
             to.copy_from_slice(&from[start..start + to.len()]);
         });
     }
@@ -451,7 +451,7 @@ fn pairs_mut(ends: &mut [Vector3<f64>]) -> &mut [[Vector3<f64>; 2]] {
 }
 
 /// K assembled again from the bar vectors [`bar_response`] kept (the same arithmetic, so
-/// the same K), after a factor overwrote it. A static bar's entry is never set, but it has
+/// the same K), after a factor may have overwritten it. A static bar's entry is never set, but it has
 /// no blocks either: `add_bar` returns.
 fn assemble_kept(r: &mut Reactions, bars: &[BarKept]) {
     r.clear();

@@ -26,7 +26,7 @@ pub trait Rhs {
     /// Runs `f(start, part)` over parts of `out` that together make it, perhaps on several
     /// threads at once (the evaluation's, for large structures); for loops over independent
     /// entries, whose results do not depend on the split.
-    fn split_mut(&self, out: &mut [f64], f: &(dyn Fn(usize, &mut [f64]) + Sync)) {
+    fn for_each_half(&self, out: &mut [f64], f: &(dyn Fn(usize, &mut [f64]) + Sync)) {
         f(0, out);
     }
     /// `∂a/∂q` and `∂a/∂v` of the accelerations (the second half of `f`) at `(t, y)`, each

@@ -23,7 +23,7 @@ impl Rk4 {
 
 /// `stage = y + c k`, entry by entry (split over threads where the evaluation has two).
 fn set_stage(rhs: &dyn Rhs, stage: &mut [f64], y: &[f64], c: f64, k: &[f64]) {
-    rhs.split_mut(stage, &|start, s| {
+    rhs.for_each_half(stage, &|start, s| {
         let part = start..start + s.len();
         for ((s, y), k) in s.iter_mut().zip(&y[part.clone()]).zip(&k[part]) {
             *s = y + c * k;
@@ -42,7 +42,7 @@ impl Integrator for Rk4 {
         set_stage(rhs, &mut self.stage, y, h, k3);
         rhs.eval(t + h, &self.stage, k4);
         let (k1, k2, k3, k4) = (&*k1, &*k2, &*k3, &*k4);
-        rhs.split_mut(y, &|start, y| {
+        rhs.for_each_half(y, &|start, y| {
             let part = start..start + y.len();
             let k12 = k1[part.clone()].iter().zip(&k2[part.clone()]);
             let k34 = k3[part.clone()].iter().zip(&k4[part]);

@@ -30,8 +30,8 @@ type Block = [Lanes; 9];
 #[derive(Debug, Clone)]
 pub struct LaneGroups {
     groups: Vec<LaneGroup>,
-    /// The groups' blocks of K, group after group; the factor overwrites them as the scalar
-    /// one does its `k_values`.
+    /// The groups' blocks of K, group after group; the factor overwrites them (pivot
+    /// blocks included: here the lanes' stores are not the bottleneck).
     k: Vec<Block>,
     /// Per slot of the scalar layout, its block in `k` times [`LANES`], plus its lane.
     lane_of: Vec<usize>,

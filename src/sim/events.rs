@@ -157,7 +157,7 @@ impl Events {
     /// Notes the state a step starts from: copies it and takes the switches' signs there
     /// (from the last step's end when that is this state, with the same inputs).
     pub fn start(&mut self, model: &Model, inputs: &Inputs, y: &[f64], ws: &Workspace) {
-        ws.copy(&mut self.y0, y);
+        ws.copy_in_halves(&mut self.y0, y);
         if self.end_known && self.y1 == y && self.rest1 == inputs.rest_length {
             std::mem::swap(&mut self.x0, &mut self.x1);
             std::mem::swap(&mut self.positive0, &mut self.positive1);
@@ -201,7 +201,7 @@ impl Events {
             }
         }
         if earliest.is_none() {
-            ws.copy(&mut self.y1, y);
+            ws.copy_in_halves(&mut self.y1, y);
             self.rest1.copy_from_slice(&inputs.rest_length);
             self.end_known = true;
         }
@@ -277,7 +277,7 @@ impl Events {
 /// them: the ends are independent).
 fn end_positions(model: &Model, y: &[f64], x: &mut [Vector3<f64>], ws: &Workspace) {
     let q = &y[..y.len() / 2];
-    ws.split_mut(x, |start, x| {
+    ws.for_each_half(x, |start, x| {
         for (e, x) in (start..).zip(x) {
             *x = model.coords.end_vector(e, q, true);
         }
@@ -292,7 +292,7 @@ fn signs(
     out: &mut [bool],
     ws: &Workspace,
 ) {
-    ws.split_mut(out, |start, out| {
+    ws.for_each_half(out, |start, out| {
         for (p, s) in out.iter_mut().zip(&switches[start..]) {
             *p = positive(s, inputs, x);
         }

@@ -113,12 +113,12 @@ impl Rhs for System<'_> {
         let half = y.len() / 2;
         let (q, v) = y.split_at(half);
         let (dq, dv) = dy.split_at_mut(half);
-        self.ws.copy(dq, v);
+        self.ws.copy_in_halves(dq, v);
         dynamics::accelerations(self.model, self.inputs, t, q, v, self.ws, dv);
     }
 
-    fn split_mut(&self, out: &mut [f64], f: &(dyn Fn(usize, &mut [f64]) + Sync)) {
-        self.ws.split_mut(out, f);
+    fn for_each_half(&self, out: &mut [f64], f: &(dyn Fn(usize, &mut [f64]) + Sync)) {
+        self.ws.for_each_half(out, f);
     }
 
     fn jacobian(&mut self, t: f64, y: &[f64]) -> Option<(DMatrix<f64>, DMatrix<f64>)> {

@@ -40,7 +40,7 @@ impl Simulation {
         self.check_inputs()?;
         self.check_step_stability()?;
         self.note_input_changes();
-        self.ws.copy(&mut self.last_good, &self.state.y);
+        self.ws.copy_in_halves(&mut self.last_good, &self.state.y);
         self.attempt_located(t, h)?;
         self.state.time = t_next;
         Ok(())
@@ -100,7 +100,7 @@ impl Simulation {
             } else {
                 rest
             };
-            self.ws.copy(&mut self.last_good, &self.state.y);
+            self.ws.copy_in_halves(&mut self.last_good, &self.state.y);
             self.attempt_located(t0, h)?;
             self.state.time = t1;
         }
@@ -135,7 +135,7 @@ impl Simulation {
                 });
             }
             attempts += 1;
-            self.ws.copy(&mut self.last_good, &self.state.y);
+            self.ws.copy_in_halves(&mut self.last_good, &self.state.y);
             if locate {
                 self.events
                     .start(&self.model, &self.inputs, &self.state.y, &self.ws);

@@ -5,8 +5,8 @@
 //! on, K's blocks by the bars that set them, the reactions' right-hand side and their
 //! addition to the end forces by constraint columns at a seam across which no end is
 //! shared, and the factor by the connected components of K (a tower's three chains of
-//! joints), which factor independently (the thread with more of them hands its last one's
-//! backward substitution to the other). The halves run the baseline x86-64 build of the
+//! joints), which factor independently (when the first thread has more columns and more
+//! than one component, it hands its last one's backward substitution to the second). The halves run the baseline x86-64 build of the
 //! stages (the one-thread evaluation picks AVX2 where it can; the bits are the same). An item's arithmetic is the one-thread evaluation's, and every sum
 //! keeps its order: where both halves add to one value (a block of K at the seam, the
 //! acceleration of a node the seam's two bars share), the second half's terms wait until
@@ -18,6 +18,8 @@
 //! the 60,000-bar benchmark run side by side without slowing each other).
 
 mod helper;
+
+use std::sync::atomic::{AtomicU8, Ordering};
 
 use nalgebra::Vector3;
 
@@ -58,7 +60,7 @@ pub struct Halves {
     /// the second thread runs, once the first has factored them (0 if none): the factor
     /// is bound by memory, so a thread with two of the tower's three chains hands the
     /// second one's backward pass to the thread with one.
-    handoff: usize,
+    handed_columns: usize,
     /// Constraint columns `[0, even)` are the first thread's for the right-hand side and
     /// the addition of Ω to the end forces (half of them, acting on ends of their own).
     even: usize,
@@ -101,7 +103,7 @@ impl Halves {
         let mut deferred = vec![false; n_contributions];
         let mut deferred_bars = Vec::new();
         let mut columns = [Vec::new(), Vec::new()];
-        let mut handoff = 0;
+        let mut handed_columns = 0;
         let mut even = 0;
         if let Some(chol) = chol {
             let mut first_half = vec![false; chol.slots()];
@@ -116,7 +118,7 @@ impl Halves {
                     deferred_bars.push(b);
                 }
             }
-            (columns, handoff) = split_components(chol);
+            (columns, handed_columns) = split_components(chol);
             even = seam(
                 chol.size(),
                 |c| reactions.column_terms(c),
@@ -145,7 +147,7 @@ impl Halves {
             deferred,
             deferred_bars,
             columns,
-            handoff,
+            handed_columns,
             even,
             late,
             late_ends,
@@ -277,7 +279,7 @@ fn split_components(chol: &BlockLdl) -> ([Vec<usize>; 2], usize) {
 
 /// The first thread's word that the columns it hands off are factored (and how).
 #[derive(Default)]
-struct Handoff(std::sync::atomic::AtomicU8);
+struct Handoff(AtomicU8);
 
 /// Sends its outcome once; a failure if dropped unsent (a panic), so the waiter ends.
 struct Signal<'a>(Option<&'a Handoff>);
@@ -291,12 +293,18 @@ impl Handoff {
         Signal(Some(self))
     }
 
-    /// Waits (spinning: the other thread's factor is a fraction of a millisecond away)
-    /// for the outcome; true if the columns were factored.
+    /// Waits for the outcome; true if the columns were factored. It spins (the other
+    /// thread's factor is about a millisecond away at most), yielding its core after a
+    /// while in case the other thread needs it.
     fn wait(&self) -> bool {
+        let mut spins = 0u32;
         loop {
-            match self.0.load(std::sync::atomic::Ordering::Acquire) {
-                PENDING => std::hint::spin_loop(),
+            match self.0.load(Ordering::Acquire) {
+                PENDING if spins < 1 << 16 => {
+                    spins += 1;
+                    std::hint::spin_loop();
+                }
+                PENDING => std::thread::yield_now(),
                 outcome => return outcome == FACTORED,
             }
         }
@@ -307,9 +315,7 @@ impl Signal<'_> {
     fn send(&mut self, factored: bool) {
         if let Some(handoff) = self.0.take() {
             let outcome = if factored { FACTORED } else { FAILED };
-            handoff
-                .0
-                .store(outcome, std::sync::atomic::Ordering::Release);
+            handoff.0.store(outcome, Ordering::Release);
         }
     }
 }
@@ -521,8 +527,10 @@ pub(super) fn evaluate(
                 helper.join(|| rhs(0), || rhs(1));
                 let tiny = BlockLdl::singular_below(scale);
                 let (own, handed) =
-                    halves.columns[0].split_at(halves.columns[0].len() - halves.handoff);
+                    halves.columns[0].split_at(halves.columns[0].len() - halves.handed_columns);
                 let factored = Handoff::default();
+                // The waiter is `join`'s second closure: a join without the helper runs
+                // the first, which always sends, before it.
                 // SAFETY: components share no slot, pivot or right-hand side entry; the
                 // handed-off columns' backward substitution waits for their factor.
                 let (ok0, ok1) = helper.join(
@@ -557,7 +565,7 @@ pub(super) fn evaluate(
             };
             if !solved {
                 // A self-stressed frame: K again from the kept bar vectors (the factor
-                // overwrote it), then the one-thread path, which fails the same way and
+                // may have overwritten it), then the one-thread path, which fails the same way and
                 // takes the dense solve.
                 super::assemble_kept(&mut ws.reactions, &ws.bars);
                 super::add_reactions(ws);

@@ -97,7 +97,7 @@ fn a_tower_gives_the_same_bits_on_two_threads() {
         "two chains and one"
     );
     assert_eq!(
-        halves.handoff, 30,
+        halves.handed_columns, 30,
         "the second chain's backward substitution handed to the other thread"
     );
 }
@@ -132,7 +132,7 @@ fn a_failed_factor_on_two_threads_falls_back_as_on_one() {
     let seen = same_bits_on_two_threads(&model, &Inputs::start(&model));
     assert!(seen.halves.columns.iter().all(|c| !c.is_empty()));
     assert!(
-        seen.halves.handoff > 0,
+        seen.halves.handed_columns > 0,
         "a failed factor with a handoff waiting on it"
     );
     assert_eq!(
@@ -150,4 +150,24 @@ fn layouts_two_threads_cannot_share_keep_one() {
     let tower = Model::new(&builtin("tower20").unwrap()).unwrap();
     assert!(Halves::new(&tower, 2).is_none(), "the lanes hold K");
     assert!(Halves::new(&Model::new(&prism).unwrap(), usize::MAX).is_none());
+}
+
+/// The handoff's word carries the outcome, and a signal dropped unsent (a panic unwinding
+/// the first thread) reads as a failure, so the waiting thread always ends.
+#[test]
+fn the_handoff_carries_the_outcome_and_a_dropped_signal_fails() {
+    let sent = super::Handoff::default();
+    sent.signal().send(true);
+    assert!(sent.wait());
+    let failed = super::Handoff::default();
+    failed.signal().send(false);
+    assert!(!failed.wait());
+    let dropped = super::Handoff::default();
+    drop(dropped.signal());
+    assert!(!dropped.wait());
+    let first_only = super::Handoff::default();
+    let mut signal = first_only.signal();
+    signal.send(true);
+    drop(signal);
+    assert!(first_only.wait(), "a signal sends once");
 }

@@ -338,7 +338,8 @@ impl BlockLdl {
         self.pattern.slot(row, col)
     }
 
-    /// Factors K as put (overwriting it) and solves `K x = b` in place. The forward
+    /// Factors K as put (overwriting its blocks below the diagonal that take updates;
+    /// pivot blocks stay as put) and solves `K x = b` in place. The forward
     /// substitution runs inside the factor's sweep, column by column as it is factored, so
     /// L is streamed twice per solve, not three times (the same operations in the same
     /// order as a separate forward pass). False if K is not (numerically) positive

@@ -306,7 +306,7 @@ impl Reactions {
 
     /// Solves `K Ω = rhs` in place; returns false when the sparse factor failed and the
     /// dense fallback was used (a statically indeterminate configuration). The factor
-    /// overwrites K and, as it solves in the same sweep, the right-hand side, so the
+    /// may overwrite K (its updated blocks) and, as it solves in the same sweep, the right-hand side, so the
     /// fallback calls `assemble_again` to assemble the same K and right-hand side again
     /// (the caller still has what they came from; keeping copies here would cost every
     /// evaluation).
