@@ -226,33 +226,50 @@ mod tests {
 
     /// Elastic cables taken in pairs give each cable's density and end forces as one cable
     /// at a time computes them (`taut_density` of `|s|` from nalgebra), bit for bit: taut
-    /// and slack cables, and an odd count (the last one alone).
+    /// and slack cables, one exactly at its rest length, one between coincident nodes, a
+    /// node pulled by four cables (so the order of the pulls shows), and an odd count (the
+    /// last one alone).
     #[test]
     fn cables_in_pairs_give_the_bits_of_one_at_a_time() {
-        let x: Vec<Vector3<f64>> = (0..8)
+        let mut x: Vec<Vector3<f64>> = (0..8)
             .map(|i| {
                 let f = i as f64;
                 Vector3::new((0.7 * f).sin(), 0.3 * f, (1.3 * f).cos() / 3.0)
             })
             .collect();
-        let cables: Vec<(CableLink, f64, f64)> = (0..7)
+        x[7] = x[6];
+        let nodes = [
+            (0, 1),
+            (0, 2),
+            (0, 3),
+            (1, 4),
+            (2, 5),
+            (6, 7),
+            (3, 5),
+            (4, 0),
+            (5, 6),
+        ];
+        let (slack, exact, coincident) = ([0, 3, 8], 7, 5);
+        let cables: Vec<(CableLink, f64, f64)> = (0..nodes.len())
             .map(|j| {
+                let (a, b) = nodes[j];
                 let link = CableLink {
                     cable: j,
-                    nodes: [j, (3 * j + 1) % 8],
-                    ends: [Some(j), Some((3 * j + 1) % 8)],
+                    nodes: [a, b],
+                    ends: [Some(a), Some(b)],
                 };
-                let length = (x[link.nodes[1]] - x[link.nodes[0]]).norm();
-                // Every third cable slack, the others stretched by 1–7 %.
-                let rest = if j % 3 == 0 {
+                let length = (x[b] - x[a]).norm();
+                let rest = if slack.contains(&j) {
                     1.1 * length
+                } else if j == exact {
+                    length
                 } else {
                     length / (1.0 + 0.01 * j as f64)
                 };
                 (link, 100.0 + 17.0 * j as f64, rest)
             })
             .collect();
-        let (mut end_force, mut gamma) = (vec![Vector3::zeros(); 8], vec![f64::NAN; 7]);
+        let (mut end_force, mut gamma) = (vec![Vector3::zeros(); 8], vec![f64::NAN; 9]);
         let mut sink = Slices {
             end_force: &mut end_force,
             gamma: &mut gamma,
@@ -265,7 +282,8 @@ mod tests {
             let s = x[link.nodes[1]] - x[link.nodes[0]];
             let expected = taut_density(*stiffness, *rest, s.norm());
             assert_eq!(gamma[j].to_bits(), expected.to_bits(), "cable {j}");
-            assert_eq!(expected == 0.0, j % 3 == 0, "cable {j} slack or taut");
+            let taut = !(slack.contains(&j) || j == exact || j == coincident);
+            assert_eq!(expected > 0.0, taut, "cable {j} taut, or slack");
             expected_force[link.nodes[0]] += s * expected;
             expected_force[link.nodes[1]] += -s * expected;
         }

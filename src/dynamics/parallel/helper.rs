@@ -25,15 +25,18 @@ const DONE: u32 = 2;
 /// The helper returns.
 const EXIT: u32 = 3;
 
+// Waking a sleeping thread costs a system call on both sides and, on a shared virtual
+// machine, tens of microseconds or more before it runs; with waits that slept after 50 µs,
+// a 60,000-bar step took 1.12–1.3× as long as with these (paired medians; the README's
+// performance section). The price: a waiting thread keeps its core busy, yielding it to
+// any other thread runnable there, for up to the patience below after its last job.
+
 /// How long the helper waits for its next job before it sleeps: the stages of one
 /// evaluation follow each other within microseconds, and the work between evaluations that
 /// runs on one thread (the correction, at 60,000 bars) within a couple of milliseconds.
 const JOB_PATIENCE: Duration = Duration::from_millis(2);
-/// How long a caller waits for the helper's half of a join before it sleeps: a half is a
-/// few milliseconds at most at the sizes measured. Waking a sleeping thread costs a system
-/// call on both sides and, on a shared virtual machine, tens of microseconds to
-/// milliseconds before it runs: when both waits slept after 50 µs, a 60,000-bar step took
-/// 1.3× as long (paired), and 6,000 bars from 1.0× to 8× as long.
+/// How long a caller waits for the helper's half of a join before it sleeps: a half takes
+/// a few milliseconds at most at the sizes measured.
 const RESULT_PATIENCE: Duration = Duration::from_millis(10);
 /// Checks of the state before a waiting thread starts yielding its core between checks.
 const SPINS: u32 = 1_000;
@@ -198,7 +201,7 @@ fn serve(shared: &Shared) {
 }
 
 /// Returns once `state` satisfies `ready`: spins for [`SPINS`] checks, then yields its
-/// core between checks (to a thread the machine has waiting, if any) until `patience` has
+/// core between checks (to another thread runnable on it, if any) until `patience` has
 /// passed, then sleeps until woken (every change this waits for is followed by an unpark,
 /// whose token a later park consumes, so no wake-up is lost; parking may also wake
 /// spuriously, so it checks again).
