@@ -129,13 +129,7 @@ pub(crate) struct Directions {
 
 impl Directions {
     fn new(per_bar: &[Vec<(usize, f64)>]) -> Self {
-        let mut start = Vec::with_capacity(per_bar.len() + 1);
-        start.push(0);
-        let mut terms = Vec::with_capacity(per_bar.iter().map(Vec::len).sum());
-        for direction in per_bar {
-            terms.extend_from_slice(direction);
-            start.push(terms.len());
-        }
+        let (start, terms) = super::flatten(per_bar);
         Self { start, terms }
     }
 

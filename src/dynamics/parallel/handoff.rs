@@ -2,6 +2,9 @@
 //! factored, so the second can run their backward substitution.
 
 use std::sync::atomic::{AtomicU8, Ordering};
+use std::time::Duration;
+
+use super::helper::spin_then_yield;
 
 /// The first thread's word that the columns it hands off are factored (and how).
 #[derive(Default)]
@@ -21,19 +24,11 @@ impl Handoff {
 
     /// Waits for the outcome; true if the columns were factored. It spins (the other
     /// thread's factor is about a millisecond away at most), yielding its core after a
-    /// while in case the other thread needs it.
+    /// while in case the other thread needs it; it never sleeps (nothing would wake it).
     pub(super) fn wait(&self) -> bool {
-        let mut spins = 0u32;
-        loop {
-            match self.0.load(Ordering::Acquire) {
-                PENDING if spins < 1 << 16 => {
-                    spins += 1;
-                    std::hint::spin_loop();
-                }
-                PENDING => std::thread::yield_now(),
-                outcome => return outcome == FACTORED,
-            }
-        }
+        let outcome = || self.0.load(Ordering::Acquire);
+        spin_then_yield(|| outcome() != PENDING, 1 << 16, Duration::MAX);
+        outcome() == FACTORED
     }
 }
 

@@ -200,24 +200,38 @@ fn serve(shared: &Shared) {
     }
 }
 
-/// Returns once `state` satisfies `ready`: spins for [`SPINS`] checks, then yields its
-/// core between checks (to another thread runnable on it, if any) until `patience` has
-/// passed, then sleeps until woken (every change this waits for is followed by an unpark,
-/// whose token a later park consumes, so no wake-up is lost; parking may also wake
-/// spuriously, so it checks again).
+/// Returns once `state` satisfies `ready`: spins and yields as [`spin_then_yield`] does
+/// for [`SPINS`] checks and `patience`, then sleeps until woken (every change this waits
+/// for is followed by an unpark, whose token a later park consumes, so no wake-up is lost;
+/// parking may also wake spuriously, so it checks again).
 fn wait_until(state: &AtomicU32, ready: impl Fn(u32) -> bool, patience: Duration) {
-    let mut spins = 0u32;
-    let mut yielding_since = None;
-    while !ready(state.load(Ordering::Acquire)) {
-        if spins < SPINS {
-            spins += 1;
-            std::hint::spin_loop();
-        } else if yielding_since.get_or_insert_with(Instant::now).elapsed() < patience {
-            std::thread::yield_now();
-        } else {
-            std::thread::park();
-        }
+    let ready = || ready(state.load(Ordering::Acquire));
+    if spin_then_yield(ready, SPINS, patience) {
+        return;
     }
+    while !ready() {
+        std::thread::park();
+    }
+}
+
+/// Waits for `ready()` without sleeping: spins for `spins` checks, then yields its core
+/// between checks (to another thread runnable on it, if any) until `patience` has passed.
+/// Whether `ready()` held.
+pub(super) fn spin_then_yield(ready: impl Fn() -> bool, spins: u32, patience: Duration) -> bool {
+    for _ in 0..spins {
+        if ready() {
+            return true;
+        }
+        std::hint::spin_loop();
+    }
+    let yielding_since = Instant::now();
+    while !ready() {
+        if yielding_since.elapsed() >= patience {
+            return false;
+        }
+        std::thread::yield_now();
+    }
+    true
 }
 
 impl Drop for Started {

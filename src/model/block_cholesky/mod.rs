@@ -288,7 +288,7 @@ impl Pattern {
             col.extend(rows);
             l_cols.push(col);
         }
-        let (l_start, l_rows) = flatten(&l_cols);
+        let (l_start, l_rows) = super::flatten(&l_cols);
         let mut rows_of: Vec<Vec<(usize, usize)>> = vec![Vec::new(); n];
         for j in 0..n {
             for p in l_start[j] + 1..l_start[j + 1] {
@@ -507,17 +507,6 @@ fn inverse3(a: &Matrix3<f64>, tiny: f64) -> Option<Matrix3<f64>> {
         c20 * r, c21 * r, m2 * r,
     );
     Some(inv)
-}
-
-fn flatten<T: Copy>(lists: &[Vec<T>]) -> (Vec<usize>, Vec<T>) {
-    let mut start = Vec::with_capacity(lists.len() + 1);
-    let mut items = Vec::new();
-    start.push(0);
-    for list in lists {
-        items.extend_from_slice(list);
-        start.push(items.len());
-    }
-    (start, items)
 }
 
 #[cfg(test)]
