@@ -6,6 +6,8 @@
 //! `b·b̈ = −|ḃ|²`, λ is closed-form per bar. Ω enters λ through the end forces and comes
 //! from `N̈ P = 0`; it is a stage only when the scene has pins or joints.
 
+#[cfg(target_arch = "x86_64")]
+mod bar_lanes;
 pub mod effects;
 pub mod energy;
 pub mod parallel;
@@ -364,14 +366,47 @@ pub fn bar_response(model: &Model, ws: &mut Workspace) {
         reactions,
         ..
     } = ws;
-    // Bar i's ends are 2i and 2i + 1: pairs of ends, zipped, need no index checks.
-    let ends = pairs(end_pos)
+    let add_bar = |i: usize, bv: &Vector3<f64>, inv_l2: f64| {
+        if with_reactions {
+            reactions.add_bar(i, bv, inv_l2);
+        }
+    };
+    let given = (pairs(end_pos), pairs(end_vel), pairs(end_force));
+    let out = (
+        pairs_mut(end_acc),
+        lambda.as_mut_slice(),
+        bars.as_mut_slice(),
+    );
+    #[cfg(target_arch = "x86_64")]
+    if std::arch::is_x86_feature_detected!("avx2") {
+        // SAFETY: the processor has AVX2.
+        return unsafe { bar_lanes::first_pass(model, given, out, add_bar) };
+    }
+    first_response(model, (0, given.0, given.1, given.2), out, add_bar);
+}
+
+/// The first λ pass over a run of bars from bar `first` on (given their end positions,
+/// velocities and forces), with `add_bar(i, b, 1/|b|²)` for each moving bar `i`.
+#[inline(always)]
+#[allow(clippy::type_complexity)]
+fn first_response(
+    model: &Model,
+    (first, xs, vs, fs): (
+        usize,
+        &[[Vector3<f64>; 2]],
+        &[[Vector3<f64>; 2]],
+        &[[Vector3<f64>; 2]],
+    ),
+    (end_acc, lambda, bars): (&mut [[Vector3<f64>; 2]], &mut [f64], &mut [BarKept]),
+    mut add_bar: impl FnMut(usize, &Vector3<f64>, f64),
+) {
+    let range = first..first + xs.len();
+    let per_bar = model.coords.static_bar[range.clone()]
         .iter()
-        .zip(pairs(end_vel))
-        .zip(pairs(end_force));
-    let out = pairs_mut(end_acc).iter_mut().zip(lambda).zip(bars);
-    let per_bar = model.coords.static_bar.iter().zip(&model.inertia);
-    for (i, ((&fixed, inertia), (((x, v), f), ((acc, lambda), cached)))) in
+        .zip(&model.inertia[range]);
+    let ends = xs.iter().zip(vs).zip(fs);
+    let out = end_acc.iter_mut().zip(lambda).zip(bars);
+    for (i, ((&fixed, inertia), (((x, v), f), ((acc, lambda), kept)))) in
         per_bar.zip(ends.zip(out)).enumerate()
     {
         if fixed {
@@ -383,15 +418,13 @@ pub fn bar_response(model: &Model, ws: &mut Workspace) {
         let bdot = v[1] - v[0];
         // One division per bar: 1/|b|² serves K's u uᵀ and λ's denominator.
         let inv_l2 = 1.0 / bv.norm_squared();
-        *cached = (
+        *kept = (
             bv,
             -bdot.norm_squared(),
             inv_l2 * inertia.inv_beta_minus_alpha,
         );
-        if with_reactions {
-            reactions.add_bar(i, &bv, inv_l2);
-        }
-        (*lambda, *acc) = response(inertia, *cached, f);
+        add_bar(first + i, &bv, inv_l2);
+        (*lambda, *acc) = response(inertia, *kept, f);
     }
 }
 
@@ -399,9 +432,15 @@ pub fn bar_response(model: &Model, ws: &mut Workspace) {
 /// from what [`bar_response`] kept.
 #[inline(always)]
 fn bar_response_again(model: &Model, ws: &mut Workspace) {
-    let per_bar = (model.coords.static_bar.as_slice(), model.inertia.as_slice());
     let given = (ws.bars.as_slice(), pairs(&ws.end_force));
-    second_response(per_bar, given, (pairs_mut(&mut ws.end_acc), &mut ws.lambda));
+    let out = (pairs_mut(&mut ws.end_acc), ws.lambda.as_mut_slice());
+    #[cfg(target_arch = "x86_64")]
+    if std::arch::is_x86_feature_detected!("avx2") {
+        // SAFETY: the processor has AVX2.
+        return unsafe { bar_lanes::second_pass(model, given, out) };
+    }
+    let per_bar = (model.coords.static_bar.as_slice(), model.inertia.as_slice());
+    second_response(per_bar, given, out);
 }
 
 /// [`bar_response_again`] for a run of bars.

@@ -45,6 +45,48 @@ impl BarInertia {
     }
 }
 
+/// Four bars' constants of λ and the end accelerations, one bar per lane, for the step's
+/// four-bars-at-a-time λ passes (lane `l` of group `g` is bar `4g + l`).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct InertiaLanes {
+    /// Whether all four bars exist and move (else the group is taken bar by bar).
+    pub moving: bool,
+    /// α per lane, 1/kg.
+    pub alpha: [f64; 4],
+    /// β per lane, 1/kg.
+    pub beta: [f64; 4],
+    /// `1/(β − α)` per lane, kg.
+    pub inv_beta_minus_alpha: [f64; 4],
+    /// `W` per lane, by entry: `W_aa`, `W_ab`, `W_ba`, `W_bb`, 1/kg.
+    pub w: [[f64; 4]; 4],
+}
+
+impl InertiaLanes {
+    /// The groups of four of `inertia` (a last partial group is padded and not `moving`);
+    /// `static_bar` tells which bars do not move.
+    pub fn groups(inertia: &[BarInertia], static_bar: &[bool]) -> Vec<Self> {
+        let lanes = |i: &[BarInertia], f: fn(&BarInertia) -> f64| {
+            std::array::from_fn(|l| i.get(l).map_or(0.0, f))
+        };
+        inertia
+            .chunks(4)
+            .zip(static_bar.chunks(4))
+            .map(|(i, fixed)| Self {
+                moving: i.len() == 4 && !fixed.contains(&true),
+                alpha: lanes(i, |b| b.alpha),
+                beta: lanes(i, |b| b.beta),
+                inv_beta_minus_alpha: lanes(i, |b| b.inv_beta_minus_alpha),
+                w: [
+                    lanes(i, |b| b.w[0][0]),
+                    lanes(i, |b| b.w[0][1]),
+                    lanes(i, |b| b.w[1][0]),
+                    lanes(i, |b| b.w[1][1]),
+                ],
+            })
+            .collect()
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

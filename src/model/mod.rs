@@ -21,7 +21,7 @@ pub use coords::BasisKind;
 use coords::Coordinates;
 use correction_plan::CorrectionPlan;
 use effects::Pipeline;
-use inertia::BarInertia;
+use inertia::{BarInertia, InertiaLanes};
 use reactions::Reactions;
 use supports::Support;
 
@@ -108,6 +108,8 @@ pub struct Model {
     pub payload: Vec<f64>,
     /// Inverse mass data per bar (rod plus payloads).
     pub inertia: Vec<BarInertia>,
+    /// The same, four bars to a group, for the step's λ passes.
+    pub inertia_lanes: Vec<InertiaLanes>,
     /// The ground plane, if the scene has one.
     pub ground: Option<Ground>,
     /// How to read the support reaction of each pinned node.
@@ -249,6 +251,7 @@ impl Model {
             cables: built.cables,
             gravity: scene.gravity.map(Vector3::from),
             payload,
+            inertia_lanes: InertiaLanes::groups(&inertia, &coords.static_bar),
             inertia,
             ground,
             supports,

@@ -29,7 +29,7 @@ use handoff::Handoff;
 pub use helper::{on_helper_thread, Helper};
 
 use super::effects::{self, ForceSink};
-use super::{pairs, pairs_mut, response, BarKept, Inputs, Workspace};
+use super::{first_response, pairs, pairs_mut, Inputs, Workspace};
 use crate::model::block_cholesky::BlockLdl;
 use crate::model::Model;
 
@@ -338,50 +338,6 @@ fn ends_half(
     super::end_states(basis.0, basis.1, q, v, (x, xdot));
     f.iter_mut().for_each(|f| *f = Vector3::zeros());
     acc.iter_mut().for_each(|a| *a = 0.0);
-}
-
-/// The first λ pass over a run of bars from bar `first` on (given their end positions,
-/// velocities and forces), with `add_bar(i, b, 1/|b|²)` for each moving bar `i`: the
-/// arithmetic of [`super::bar_response`], which keeps its own loop (through this function
-/// and a closure, tower20 took 3% more instructions).
-#[inline(always)]
-#[allow(clippy::type_complexity)]
-fn first_response(
-    model: &Model,
-    (first, xs, vs, fs): (
-        usize,
-        &[[Vector3<f64>; 2]],
-        &[[Vector3<f64>; 2]],
-        &[[Vector3<f64>; 2]],
-    ),
-    (end_acc, lambda, bars): (&mut [[Vector3<f64>; 2]], &mut [f64], &mut [BarKept]),
-    mut add_bar: impl FnMut(usize, &Vector3<f64>, f64),
-) {
-    let range = first..first + xs.len();
-    let per_bar = model.coords.static_bar[range.clone()]
-        .iter()
-        .zip(&model.inertia[range]);
-    let ends = xs.iter().zip(vs).zip(fs);
-    let out = end_acc.iter_mut().zip(lambda).zip(bars);
-    for (i, ((&fixed, inertia), (((x, v), f), ((acc, lambda), kept)))) in
-        per_bar.zip(ends.zip(out)).enumerate()
-    {
-        if fixed {
-            *lambda = 0.0;
-            *acc = [Vector3::zeros(); 2];
-            continue;
-        }
-        let bv = x[1] - x[0];
-        let bdot = v[1] - v[0];
-        let inv_l2 = 1.0 / bv.norm_squared();
-        *kept = (
-            bv,
-            -bdot.norm_squared(),
-            inv_l2 * inertia.inv_beta_minus_alpha,
-        );
-        add_bar(first + i, &bv, inv_l2);
-        (*lambda, *acc) = response(inertia, *kept, f);
-    }
 }
 
 #[cfg(test)]

@@ -1,0 +1,369 @@
+//! Both λ passes four bars at a time, one bar per lane of an AVX2 register.
+//!
+//! Lane by lane the arithmetic is the bar-by-bar code's ([`super::response`] and the lines
+//! of [`super::bar_response`] before it), in the same order and with no fused multiply-add,
+//! so the results are the same bits. A group of four with a static bar, and the last
+//! partial group, are taken bar by bar. K's blocks are still added bar by bar, in order.
+
+use std::arch::x86_64::{
+    __m256d, _mm256_add_pd, _mm256_div_pd, _mm256_loadu_pd, _mm256_mul_pd, _mm256_set1_pd,
+    _mm256_set_pd, _mm256_storeu_pd, _mm256_sub_pd, _mm256_xor_pd,
+};
+
+use nalgebra::Vector3;
+
+use super::BarKept;
+use crate::model::inertia::InertiaLanes;
+use crate::model::Model;
+
+/// A bar's two ends, as the passes read them.
+type Ends = [Vector3<f64>; 2];
+
+/// A vector per lane.
+#[derive(Clone, Copy)]
+struct Lanes3 {
+    x: __m256d,
+    y: __m256d,
+    z: __m256d,
+}
+
+/// The first pass over all bars (as [`super::first_response`]), four at a time where
+/// four moving bars make a group; `add_bar(i, b, 1/|b|²)` for each moving bar, in order.
+///
+/// # Safety
+/// The processor has AVX2.
+#[target_feature(enable = "avx2")]
+pub(super) unsafe fn first_pass(
+    model: &Model,
+    (x, v, f): (&[Ends], &[Ends], &[Ends]),
+    (acc, lambda, kept): (&mut [Ends], &mut [f64], &mut [BarKept]),
+    mut add_bar: impl FnMut(usize, &Vector3<f64>, f64),
+) {
+    let given = x
+        .as_chunks::<4>()
+        .0
+        .iter()
+        .zip(v.as_chunks().0)
+        .zip(f.as_chunks().0);
+    let out = acc.as_chunks_mut::<4>().0.iter_mut();
+    let out = out
+        .zip(lambda.as_chunks_mut().0)
+        .zip(kept.as_chunks_mut().0);
+    let groups = model.inertia_lanes.iter().zip(given.zip(out));
+    for (g, (lanes, (((x, v), f), ((acc, lambda), kept)))) in groups.enumerate() {
+        let first = 4 * g;
+        if lanes.moving {
+            let inv_l2 = first_response(lanes, (x, v), f, (acc, lambda, kept));
+            for (l, kept) in kept.iter().enumerate() {
+                add_bar(first + l, &kept.0, inv_l2[l]);
+            }
+        } else {
+            let out = (&mut acc[..], &mut lambda[..], &mut kept[..]);
+            super::first_response(model, (first, x, v, f), out, &mut add_bar);
+        }
+    }
+    let done = x.len() / 4 * 4;
+    let given = (done, &x[done..], &v[done..], &f[done..]);
+    let out = (&mut acc[done..], &mut lambda[done..], &mut kept[done..]);
+    super::first_response(model, given, out, &mut add_bar);
+}
+
+/// The second pass over all bars (as [`super::second_response`]), four at a time where
+/// four moving bars make a group.
+///
+/// # Safety
+/// The processor has AVX2.
+#[target_feature(enable = "avx2")]
+pub(super) unsafe fn second_pass(
+    model: &Model,
+    (kept, f): (&[BarKept], &[Ends]),
+    (acc, lambda): (&mut [Ends], &mut [f64]),
+) {
+    let given = kept.as_chunks::<4>().0.iter().zip(f.as_chunks().0);
+    let out = acc
+        .as_chunks_mut::<4>()
+        .0
+        .iter_mut()
+        .zip(lambda.as_chunks_mut().0);
+    let groups = model.inertia_lanes.iter().zip(given.zip(out));
+    for (g, (lanes, ((kept, f), (acc, lambda)))) in groups.enumerate() {
+        if lanes.moving {
+            response(lanes, kept, f, (acc, lambda));
+        } else {
+            let bars = 4 * g..4 * g + 4;
+            let per_bar = (&model.coords.static_bar[bars.clone()], &model.inertia[bars]);
+            super::second_response(per_bar, (kept, f), (acc, lambda));
+        }
+    }
+    let done = kept.len() / 4 * 4;
+    let per_bar = (&model.coords.static_bar[done..], &model.inertia[done..]);
+    super::second_response(
+        per_bar,
+        (&kept[done..], &f[done..]),
+        (&mut acc[done..], &mut lambda[done..]),
+    );
+}
+
+/// λ and the end accelerations of the four bars of `inertia` for end forces `f`, with
+/// `(b, −|ḃ|², 1/((β − α)|b|²))` given per bar in `kept`.
+///
+/// # Safety
+/// The processor has AVX2.
+#[inline]
+#[target_feature(enable = "avx2")]
+unsafe fn response(
+    inertia: &InertiaLanes,
+    kept: &[BarKept; 4],
+    f: &[Ends; 4],
+    (acc, lambda): (&mut [Ends; 4], &mut [f64; 4]),
+) {
+    let b = Lanes3 {
+        x: gather(|l| kept[l].0.x),
+        y: gather(|l| kept[l].0.y),
+        z: gather(|l| kept[l].0.z),
+    };
+    let minus_bdot2 = gather(|l| kept[l].1);
+    let inv_den = gather(|l| kept[l].2);
+    respond(inertia, (b, minus_bdot2, inv_den), f, (acc, lambda));
+}
+
+/// The first pass for four moving bars: their `kept` values, λ and end accelerations;
+/// returns `1/|b|²` per lane (for K).
+///
+/// # Safety
+/// The processor has AVX2.
+#[inline]
+#[target_feature(enable = "avx2")]
+unsafe fn first_response(
+    inertia: &InertiaLanes,
+    (x, v): (&[Ends; 4], &[Ends; 4]),
+    f: &[Ends; 4],
+    (acc, lambda, kept): (&mut [Ends; 4], &mut [f64; 4], &mut [BarKept; 4]),
+) -> [f64; 4] {
+    let difference = |e: &[Ends; 4], axis: usize| {
+        _mm256_sub_pd(gather(|l| e[l][1][axis]), gather(|l| e[l][0][axis]))
+    };
+    let b = Lanes3 {
+        x: difference(x, 0),
+        y: difference(x, 1),
+        z: difference(x, 2),
+    };
+    let bdot = Lanes3 {
+        x: difference(v, 0),
+        y: difference(v, 1),
+        z: difference(v, 2),
+    };
+    // As nalgebra's `norm_squared` sums (`0 + ((x² + y²) + z²)`; adding 0 to a sum of
+    // squares changes nothing).
+    let norm_squared = |u: Lanes3| {
+        let xy = _mm256_add_pd(_mm256_mul_pd(u.x, u.x), _mm256_mul_pd(u.y, u.y));
+        _mm256_add_pd(xy, _mm256_mul_pd(u.z, u.z))
+    };
+    let inv_l2 = _mm256_div_pd(_mm256_set1_pd(1.0), norm_squared(b));
+    // Negated by its sign bit, as `-x` is (`0 − x` would make −0 of 0).
+    let minus_bdot2 = _mm256_xor_pd(norm_squared(bdot), _mm256_set1_pd(-0.0));
+    let inv_den = _mm256_mul_pd(inv_l2, load(&inertia.inv_beta_minus_alpha));
+    let (bx, by, bz, m, d) = (
+        lanes(b.x),
+        lanes(b.y),
+        lanes(b.z),
+        lanes(minus_bdot2),
+        lanes(inv_den),
+    );
+    for (l, kept) in kept.iter_mut().enumerate() {
+        *kept = (Vector3::new(bx[l], by[l], bz[l]), m[l], d[l]);
+    }
+    respond(inertia, (b, minus_bdot2, inv_den), f, (acc, lambda));
+    lanes(inv_l2)
+}
+
+/// `(−|ḃ|² − b·(α f_a + β f_b)) / ((β − α)|b|²)` and `W g` per lane, as
+/// [`super::response`] computes them.
+#[inline]
+#[target_feature(enable = "avx2")]
+fn respond(
+    inertia: &InertiaLanes,
+    (b, minus_bdot2, inv_den): (Lanes3, __m256d, __m256d),
+    f: &[Ends; 4],
+    (acc, lambda): (&mut [Ends; 4], &mut [f64; 4]),
+) {
+    let end = |side: usize| Lanes3 {
+        x: gather(|l| f[l][side].x),
+        y: gather(|l| f[l][side].y),
+        z: gather(|l| f[l][side].z),
+    };
+    let (fa, fb) = (end(0), end(1));
+    let (alpha, beta) = (load(&inertia.alpha), load(&inertia.beta));
+    let weighted =
+        |a: __m256d, b: __m256d| _mm256_add_pd(_mm256_mul_pd(a, alpha), _mm256_mul_pd(b, beta));
+    let t = Lanes3 {
+        x: weighted(fa.x, fb.x),
+        y: weighted(fa.y, fb.y),
+        z: weighted(fa.z, fb.z),
+    };
+    // nalgebra's 3-vector dot product: `(x + y) + z`.
+    let dot = _mm256_add_pd(
+        _mm256_add_pd(_mm256_mul_pd(b.x, t.x), _mm256_mul_pd(b.y, t.y)),
+        _mm256_mul_pd(b.z, t.z),
+    );
+    let l = _mm256_mul_pd(_mm256_sub_pd(minus_bdot2, dot), inv_den);
+    let ga = |fa: __m256d, b: __m256d| _mm256_sub_pd(fa, _mm256_mul_pd(b, l));
+    let gb = |fb: __m256d, b: __m256d| _mm256_add_pd(fb, _mm256_mul_pd(b, l));
+    let (ga, gb) = (
+        [ga(fa.x, b.x), ga(fa.y, b.y), ga(fa.z, b.z)],
+        [gb(fb.x, b.x), gb(fb.y, b.y), gb(fb.z, b.z)],
+    );
+    let w = &inertia.w;
+    let per_side = [(load(&w[0]), load(&w[1])), (load(&w[2]), load(&w[3]))];
+    for (side, (wa, wb)) in per_side.into_iter().enumerate() {
+        for axis in 0..3 {
+            let a = _mm256_add_pd(_mm256_mul_pd(ga[axis], wa), _mm256_mul_pd(gb[axis], wb));
+            for (acc, a) in acc.iter_mut().zip(lanes(a)) {
+                acc[side][axis] = a;
+            }
+        }
+    }
+    *lambda = lanes(l);
+}
+
+#[inline]
+#[target_feature(enable = "avx2")]
+fn gather(f: impl Fn(usize) -> f64) -> __m256d {
+    _mm256_set_pd(f(3), f(2), f(1), f(0))
+}
+
+#[inline]
+#[target_feature(enable = "avx2")]
+fn load(x: &[f64; 4]) -> __m256d {
+    // SAFETY: four f64.
+    unsafe { _mm256_loadu_pd(x.as_ptr()) }
+}
+
+#[inline]
+#[target_feature(enable = "avx2")]
+fn lanes(v: __m256d) -> [f64; 4] {
+    let mut out = [0.0; 4];
+    // SAFETY: four f64.
+    unsafe { _mm256_storeu_pd(out.as_mut_ptr(), v) };
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scene::builtin;
+
+    /// A value per call, spread over magnitudes and signs, with exact zeros of both signs.
+    fn values() -> impl FnMut() -> f64 {
+        let mut k = 0u32;
+        move || {
+            k += 1;
+            match k % 23 {
+                0 => 0.0,
+                11 => -0.0,
+                _ => (f64::from(k) * 0.61).sin() * 10f64.powi((k % 5) as i32 - 2),
+            }
+        }
+    }
+
+    fn vectors(n: usize, next: &mut impl FnMut() -> f64) -> Vec<Ends> {
+        (0..n)
+            .map(|_| [(); 2].map(|_| Vector3::new(next(), next(), next())))
+            .collect()
+    }
+
+    /// Both passes four bars at a time give the bar-by-bar bits, and K's additions in the
+    /// same order with the same arguments: tower20 (fifteen groups) with static bars in two
+    /// groups, and prism2 (a group and two bars after it), with zero velocities (`−|ḃ|²`
+    /// of −0), zero forces and forces of both signs.
+    #[test]
+    fn four_at_a_time_gives_the_bits_of_one_at_a_time() {
+        if !std::arch::is_x86_feature_detected!("avx2") {
+            eprintln!("no AVX2 here: nothing to compare");
+            return;
+        }
+        let mut tower = Model::new(&builtin("tower20").unwrap()).unwrap();
+        for bar in [5, 42, 43] {
+            tower.coords.static_bar[bar] = true;
+        }
+        tower.inertia_lanes = InertiaLanes::groups(&tower.inertia, &tower.coords.static_bar);
+        let prism = Model::new(&builtin("prism2").unwrap()).unwrap();
+        assert_eq!(tower.inertia_lanes.iter().filter(|g| g.moving).count(), 13);
+        assert!(prism.inertia_lanes[0].moving && prism.bars.len() == 6);
+        let mut next = values();
+        for model in [&tower, &prism] {
+            let n = model.bars.len();
+            for round in 0..3 {
+                let x = vectors(n, &mut next);
+                let mut v = vectors(n, &mut next);
+                let mut f = vectors(n, &mut next);
+                if round == 1 {
+                    v.iter_mut()
+                        .take(7)
+                        .for_each(|v| *v = [Vector3::zeros(); 2]);
+                    f.iter_mut()
+                        .skip(3)
+                        .take(5)
+                        .for_each(|f| *f = [Vector3::zeros(); 2]);
+                }
+                let mut added = [Vec::new(), Vec::new()];
+                let mut outputs = [0, 1].map(|_| {
+                    (
+                        vectors(n, &mut next),
+                        vec![7.0; n],
+                        vec![(Vector3::zeros(), 0.0, 1.0); n],
+                    )
+                });
+                let [(acc, lambda, kept), (acc_ref, lambda_ref, kept_ref)] = &mut outputs;
+                let [add, add_ref] = &mut added;
+                // SAFETY: the processor has AVX2.
+                unsafe { first_pass(model, (&x, &v, &f), (acc, lambda, kept), record(add)) };
+                let out = (&mut acc_ref[..], &mut lambda_ref[..], &mut kept_ref[..]);
+                super::super::first_response(model, (0, &x, &v, &f), out, record(add_ref));
+                assert_eq!(add, add_ref, "{}: K's additions", model.scene.name);
+                assert_same(&outputs, &model.scene.name);
+                // The second pass with other forces.
+                let f = vectors(n, &mut next);
+                let [(acc, lambda, kept), (acc_ref, lambda_ref, kept_ref)] = &mut outputs;
+                // SAFETY: the processor has AVX2.
+                unsafe { second_pass(model, (kept, &f), (acc, lambda)) };
+                let per_bar = (&model.coords.static_bar[..], &model.inertia[..]);
+                super::super::second_response(per_bar, (kept_ref, &f), (acc_ref, lambda_ref));
+                assert_same(&outputs, &model.scene.name);
+            }
+        }
+    }
+
+    /// `add_bar` that records its arguments' bits.
+    fn record(to: &mut Vec<(usize, [u64; 4])>) -> impl FnMut(usize, &Vector3<f64>, f64) + '_ {
+        move |i, b, inv_l2| {
+            to.push((i, [b.x, b.y, b.z, inv_l2].map(f64::to_bits)));
+        }
+    }
+
+    type Outputs = (Vec<Ends>, Vec<f64>, Vec<BarKept>);
+
+    fn assert_same(
+        [(acc, lambda, kept), (acc_ref, lambda_ref, kept_ref)]: &[Outputs; 2],
+        name: &str,
+    ) {
+        let bits = |v: &Vector3<f64>| [v.x.to_bits(), v.y.to_bits(), v.z.to_bits()];
+        for (i, (a, b)) in acc.iter().zip(acc_ref).enumerate() {
+            assert_eq!(
+                a.map(|e| bits(&e)),
+                b.map(|e| bits(&e)),
+                "{name}: bar {i}'s accelerations"
+            );
+        }
+        for (i, (a, b)) in lambda.iter().zip(lambda_ref).enumerate() {
+            assert_eq!(a.to_bits(), b.to_bits(), "{name}: bar {i}'s λ");
+        }
+        for (i, (a, b)) in kept.iter().zip(kept_ref).enumerate() {
+            let (a, b) = (
+                (bits(&a.0), a.1.to_bits(), a.2.to_bits()),
+                (bits(&b.0), b.1.to_bits(), b.2.to_bits()),
+            );
+            assert_eq!(a, b, "{name}: bar {i}'s kept values");
+        }
+    }
+}
