@@ -6,8 +6,9 @@
 //! partial group, are taken bar by bar. K's blocks are still added bar by bar, in order.
 
 use std::arch::x86_64::{
-    __m256d, _mm256_add_pd, _mm256_div_pd, _mm256_loadu_pd, _mm256_mul_pd, _mm256_set1_pd,
-    _mm256_set_pd, _mm256_storeu_pd, _mm256_sub_pd, _mm256_xor_pd,
+    __m256d, _mm256_add_pd, _mm256_div_pd, _mm256_loadu2_m128d, _mm256_loadu_pd, _mm256_mul_pd,
+    _mm256_permute2f128_pd, _mm256_set1_pd, _mm256_set_pd, _mm256_storeu2_m128d, _mm256_storeu_pd,
+    _mm256_sub_pd, _mm256_unpackhi_pd, _mm256_unpacklo_pd, _mm256_xor_pd,
 };
 
 use nalgebra::Vector3;
@@ -140,19 +141,15 @@ unsafe fn first_response(
     f: &[Ends; 4],
     (acc, lambda, kept): (&mut [Ends; 4], &mut [f64; 4], &mut [BarKept; 4]),
 ) -> [f64; 4] {
-    let difference = |e: &[Ends; 4], axis: usize| {
-        _mm256_sub_pd(gather(|l| e[l][1][axis]), gather(|l| e[l][0][axis]))
+    let difference = |e: &[Ends; 4]| {
+        let [a, b] = load_ends(e);
+        Lanes3 {
+            x: _mm256_sub_pd(b.x, a.x),
+            y: _mm256_sub_pd(b.y, a.y),
+            z: _mm256_sub_pd(b.z, a.z),
+        }
     };
-    let b = Lanes3 {
-        x: difference(x, 0),
-        y: difference(x, 1),
-        z: difference(x, 2),
-    };
-    let bdot = Lanes3 {
-        x: difference(v, 0),
-        y: difference(v, 1),
-        z: difference(v, 2),
-    };
+    let (b, bdot) = (difference(x), difference(v));
     // As nalgebra's `norm_squared` sums (`0 + ((x² + y²) + z²)`; adding 0 to a sum of
     // squares changes nothing).
     let norm_squared = |u: Lanes3| {
@@ -187,12 +184,7 @@ fn respond(
     f: &[Ends; 4],
     (acc, lambda): (&mut [Ends; 4], &mut [f64; 4]),
 ) {
-    let end = |side: usize| Lanes3 {
-        x: gather(|l| f[l][side].x),
-        y: gather(|l| f[l][side].y),
-        z: gather(|l| f[l][side].z),
-    };
-    let (fa, fb) = (end(0), end(1));
+    let [fa, fb] = load_ends(f);
     let (alpha, beta) = (load(&inertia.alpha), load(&inertia.beta));
     let weighted =
         |a: __m256d, b: __m256d| _mm256_add_pd(_mm256_mul_pd(a, alpha), _mm256_mul_pd(b, beta));
@@ -214,15 +206,17 @@ fn respond(
         [gb(fb.x, b.x), gb(fb.y, b.y), gb(fb.z, b.z)],
     );
     let w = &inertia.w;
-    let per_side = [(load(&w[0]), load(&w[1])), (load(&w[2]), load(&w[3]))];
-    for (side, (wa, wb)) in per_side.into_iter().enumerate() {
-        for axis in 0..3 {
-            let a = _mm256_add_pd(_mm256_mul_pd(ga[axis], wa), _mm256_mul_pd(gb[axis], wb));
-            for (acc, a) in acc.iter_mut().zip(lanes(a)) {
-                acc[side][axis] = a;
-            }
+    let side = |wa: &[f64; 4], wb: &[f64; 4]| {
+        let (wa, wb) = (load(wa), load(wb));
+        let at =
+            |axis: usize| _mm256_add_pd(_mm256_mul_pd(ga[axis], wa), _mm256_mul_pd(gb[axis], wb));
+        Lanes3 {
+            x: at(0),
+            y: at(1),
+            z: at(2),
         }
-    }
+    };
+    store_ends([side(&w[0], &w[1]), side(&w[2], &w[3])], acc);
     *lambda = lanes(l);
 }
 
@@ -230,6 +224,69 @@ fn respond(
 #[target_feature(enable = "avx2")]
 fn gather(f: impl Fn(usize) -> f64) -> __m256d {
     _mm256_set_pd(f(3), f(2), f(1), f(0))
+}
+
+// `[Ends; 4]` is 24 f64 in a row: bar `l`'s `a.x, a.y, a.z, b.x, b.y, b.z` at `6l`.
+const _: () = assert!(std::mem::size_of::<[Ends; 4]>() == 24 * 8);
+
+/// Four bars' two ends, transposed into lanes: 4 × 4 (each bar's `a` and `b.x`) in
+/// unpacks and 128-bit swaps, and 4 × 2 (`b.y`, `b.z`).
+#[inline]
+#[target_feature(enable = "avx2")]
+fn load_ends(ends: &[Ends; 4]) -> [Lanes3; 2] {
+    let p = ends.as_ptr().cast::<f64>();
+    // SAFETY: 24 f64 from `p` (the assertion above); the reads end at `6l + 6`.
+    let (r, s) = unsafe {
+        (
+            [0, 1, 2, 3].map(|l| _mm256_loadu_pd(p.add(6 * l))),
+            [0, 1].map(|l| _mm256_loadu2_m128d(p.add(6 * l + 16), p.add(6 * l + 4))),
+        )
+    };
+    let (t0, t1) = (
+        _mm256_unpacklo_pd(r[0], r[1]),
+        _mm256_unpackhi_pd(r[0], r[1]),
+    );
+    let (t2, t3) = (
+        _mm256_unpacklo_pd(r[2], r[3]),
+        _mm256_unpackhi_pd(r[2], r[3]),
+    );
+    [
+        Lanes3 {
+            x: _mm256_permute2f128_pd::<0x20>(t0, t2),
+            y: _mm256_permute2f128_pd::<0x20>(t1, t3),
+            z: _mm256_permute2f128_pd::<0x31>(t0, t2),
+        },
+        Lanes3 {
+            x: _mm256_permute2f128_pd::<0x31>(t1, t3),
+            y: _mm256_unpacklo_pd(s[0], s[1]),
+            z: _mm256_unpackhi_pd(s[0], s[1]),
+        },
+    ]
+}
+
+/// [`load_ends`] reversed.
+#[inline]
+#[target_feature(enable = "avx2")]
+fn store_ends([a, b]: [Lanes3; 2], ends: &mut [Ends; 4]) {
+    let (t0, t1) = (_mm256_unpacklo_pd(a.x, a.y), _mm256_unpackhi_pd(a.x, a.y));
+    let (t2, t3) = (_mm256_unpacklo_pd(a.z, b.x), _mm256_unpackhi_pd(a.z, b.x));
+    let r = [
+        _mm256_permute2f128_pd::<0x20>(t0, t2),
+        _mm256_permute2f128_pd::<0x20>(t1, t3),
+        _mm256_permute2f128_pd::<0x31>(t0, t2),
+        _mm256_permute2f128_pd::<0x31>(t1, t3),
+    ];
+    let s = [_mm256_unpacklo_pd(b.y, b.z), _mm256_unpackhi_pd(b.y, b.z)];
+    let p = ends.as_mut_ptr().cast::<f64>();
+    // SAFETY: as in `load_ends`.
+    unsafe {
+        for (l, r) in r.into_iter().enumerate() {
+            _mm256_storeu_pd(p.add(6 * l), r);
+        }
+        for (l, s) in s.into_iter().enumerate() {
+            _mm256_storeu2_m128d(p.add(6 * l + 16), p.add(6 * l + 4), s);
+        }
+    }
 }
 
 #[inline]
