@@ -28,81 +28,99 @@ struct Lanes3 {
     z: __m256d,
 }
 
-/// The first pass over all bars (as [`super::first_response`]), four at a time where
-/// four moving bars make a group; `add_bar(i, b, 1/|b|²)` for each moving bar, in order.
+/// The first pass over a run of bars from bar `first` on (as [`super::first_response`]),
+/// four at a time where four moving bars make a group; `add_bar(i, b, 1/|b|²)` for each
+/// moving bar, in order.
 ///
 /// # Safety
 /// The processor has AVX2.
 #[target_feature(enable = "avx2")]
 pub(super) unsafe fn first_pass(
     model: &Model,
-    (x, v, f): (&[Ends], &[Ends], &[Ends]),
+    (first, x, v, f): (usize, &[Ends], &[Ends], &[Ends]),
     (acc, lambda, kept): (&mut [Ends], &mut [f64], &mut [BarKept]),
     mut add_bar: impl FnMut(usize, &Vector3<f64>, f64),
 ) {
-    let given = x
+    let cut = aligned(first, x.len());
+    let ([x0, x1, x2], [v0, v1, v2], [f0, f1, f2]) =
+        (thirds(x, cut), thirds(v, cut), thirds(f, cut));
+    let [a0, a1, a2] = thirds_mut(acc, cut);
+    let [l0, l1, l2] = thirds_mut(lambda, cut);
+    let [k0, k1, k2] = thirds_mut(kept, cut);
+    super::first_response(model, (first, x0, v0, f0), (a0, l0, k0), &mut add_bar);
+    let given = x1
         .as_chunks::<4>()
         .0
         .iter()
-        .zip(v.as_chunks().0)
-        .zip(f.as_chunks().0);
-    let out = acc.as_chunks_mut::<4>().0.iter_mut();
-    let out = out
-        .zip(lambda.as_chunks_mut().0)
-        .zip(kept.as_chunks_mut().0);
-    let groups = model.inertia_lanes.iter().zip(given.zip(out));
+        .zip(v1.as_chunks().0)
+        .zip(f1.as_chunks().0);
+    let out = a1.as_chunks_mut::<4>().0.iter_mut();
+    let out = out.zip(l1.as_chunks_mut().0).zip(k1.as_chunks_mut().0);
+    let start = first + cut[0];
+    let groups = model.inertia_lanes[start / 4..].iter().zip(given.zip(out));
     for (g, (lanes, (((x, v), f), ((acc, lambda), kept)))) in groups.enumerate() {
-        let first = 4 * g;
+        let bar = start + 4 * g;
         if lanes.moving {
             let inv_l2 = first_response(lanes, (x, v), f, (acc, lambda, kept));
             for (l, kept) in kept.iter().enumerate() {
-                add_bar(first + l, &kept.0, inv_l2[l]);
+                add_bar(bar + l, &kept.0, inv_l2[l]);
             }
         } else {
             let out = (&mut acc[..], &mut lambda[..], &mut kept[..]);
-            super::first_response(model, (first, x, v, f), out, &mut add_bar);
+            super::first_response(model, (bar, x, v, f), out, &mut add_bar);
         }
     }
-    let done = x.len() / 4 * 4;
-    let given = (done, &x[done..], &v[done..], &f[done..]);
-    let out = (&mut acc[done..], &mut lambda[done..], &mut kept[done..]);
-    super::first_response(model, given, out, &mut add_bar);
+    let given = (first + cut[1], x2, v2, f2);
+    super::first_response(model, given, (a2, l2, k2), &mut add_bar);
 }
 
-/// The second pass over all bars (as [`super::second_response`]), four at a time where
-/// four moving bars make a group.
+/// The second pass over a run of bars from bar `first` on (as
+/// [`super::second_response`]), four at a time where four moving bars make a group.
 ///
 /// # Safety
 /// The processor has AVX2.
 #[target_feature(enable = "avx2")]
 pub(super) unsafe fn second_pass(
     model: &Model,
-    (kept, f): (&[BarKept], &[Ends]),
+    (first, kept, f): (usize, &[BarKept], &[Ends]),
     (acc, lambda): (&mut [Ends], &mut [f64]),
 ) {
-    let given = kept.as_chunks::<4>().0.iter().zip(f.as_chunks().0);
-    let out = acc
-        .as_chunks_mut::<4>()
-        .0
-        .iter_mut()
-        .zip(lambda.as_chunks_mut().0);
-    let groups = model.inertia_lanes.iter().zip(given.zip(out));
+    let cut = aligned(first, kept.len());
+    let ([k0, k1, k2], [f0, f1, f2]) = (thirds(kept, cut), thirds(f, cut));
+    let ([a0, a1, a2], [l0, l1, l2]) = (thirds_mut(acc, cut), thirds_mut(lambda, cut));
+    super::second_response(model, (first, k0, f0), (a0, l0));
+    let given = k1.as_chunks::<4>().0.iter().zip(f1.as_chunks().0);
+    let out = a1.as_chunks_mut::<4>().0.iter_mut();
+    let out = out.zip(l1.as_chunks_mut().0);
+    let start = first + cut[0];
+    let groups = model.inertia_lanes[start / 4..].iter().zip(given.zip(out));
     for (g, (lanes, ((kept, f), (acc, lambda)))) in groups.enumerate() {
         if lanes.moving {
             response(lanes, kept, f, (acc, lambda));
         } else {
-            let bars = 4 * g..4 * g + 4;
-            let per_bar = (&model.coords.static_bar[bars.clone()], &model.inertia[bars]);
-            super::second_response(per_bar, (kept, f), (acc, lambda));
+            super::second_response(model, (start + 4 * g, kept, f), (acc, lambda));
         }
     }
-    let done = kept.len() / 4 * 4;
-    let per_bar = (&model.coords.static_bar[done..], &model.inertia[done..]);
-    super::second_response(
-        per_bar,
-        (&kept[done..], &f[done..]),
-        (&mut acc[done..], &mut lambda[done..]),
-    );
+    super::second_response(model, (first + cut[1], k2, f2), (a2, l2));
+}
+
+/// Where a run of `n` bars from bar `first` splits: the bars before the first whole group
+/// of four (bar index a multiple of four), and the end of the last whole group.
+fn aligned(first: usize, n: usize) -> [usize; 2] {
+    let head = ((4 - first % 4) % 4).min(n);
+    [head, head + (n - head) / 4 * 4]
+}
+
+fn thirds<T>(s: &[T], [a, b]: [usize; 2]) -> [&[T]; 3] {
+    let (s, tail) = s.split_at(b);
+    let (head, middle) = s.split_at(a);
+    [head, middle, tail]
+}
+
+fn thirds_mut<T>(s: &mut [T], [a, b]: [usize; 2]) -> [&mut [T]; 3] {
+    let (s, tail) = s.split_at_mut(b);
+    let (head, middle) = s.split_at_mut(a);
+    [head, middle, tail]
 }
 
 /// λ and the end accelerations of the four bars of `inertia` for end forces `f`, with
@@ -331,8 +349,9 @@ mod tests {
 
     /// Both passes four bars at a time give the bar-by-bar bits, and K's additions in the
     /// same order with the same arguments: tower20 (fifteen groups) with static bars in two
-    /// groups, and prism2 (a group and two bars after it), with zero velocities (`−|ḃ|²`
-    /// of −0), zero forces and forces of both signs.
+    /// groups and an inertia of its own per bar, and prism2 (a group and two bars after it), over all bars and over runs
+    /// that start and end inside a group (as the two threads' halves), with zero velocities
+    /// (`−|ḃ|²` of −0), zero forces and forces of both signs.
     #[test]
     fn four_at_a_time_gives_the_bits_of_one_at_a_time() {
         if !std::arch::is_x86_feature_detected!("avx2") {
@@ -343,13 +362,25 @@ mod tests {
         for bar in [5, 42, 43] {
             tower.coords.static_bar[bar] = true;
         }
+        // A mass and payloads per bar, so that a lane given another bar's constants shows.
+        for (i, inertia) in tower.inertia.iter_mut().enumerate() {
+            let i = i as f64;
+            *inertia = crate::model::inertia::BarInertia::new(1.0 + 0.1 * i, [0.01 * i, 0.3]);
+        }
         tower.inertia_lanes = InertiaLanes::groups(&tower.inertia, &tower.coords.static_bar);
         let prism = Model::new(&builtin("prism2").unwrap()).unwrap();
         assert_eq!(tower.inertia_lanes.iter().filter(|g| g.moving).count(), 13);
         assert!(prism.inertia_lanes[0].moving && prism.bars.len() == 6);
         let mut next = values();
-        for model in [&tower, &prism] {
-            let n = model.bars.len();
+        let runs = [
+            (&tower, 0..60),
+            (&tower, 0..29),
+            (&tower, 29..60),
+            (&tower, 13..15),
+        ];
+        let runs = runs.into_iter().chain([(&prism, 0..6), (&prism, 1..6)]);
+        for (model, bars) in runs {
+            let (first, n) = (bars.start, bars.len());
             for round in 0..3 {
                 let x = vectors(n, &mut next);
                 let mut v = vectors(n, &mut next);
@@ -359,34 +390,38 @@ mod tests {
                         .take(7)
                         .for_each(|v| *v = [Vector3::zeros(); 2]);
                     f.iter_mut()
-                        .skip(3)
+                        .skip(1)
                         .take(5)
                         .for_each(|f| *f = [Vector3::zeros(); 2]);
                 }
                 let mut added = [Vec::new(), Vec::new()];
                 let mut outputs = [0, 1].map(|_| {
-                    (
-                        vectors(n, &mut next),
-                        vec![7.0; n],
-                        vec![(Vector3::zeros(), 0.0, 1.0); n],
-                    )
+                    let acc = vectors(n, &mut next);
+                    (acc, vec![7.0; n], vec![(Vector3::zeros(), 0.0, 1.0); n])
                 });
                 let [(acc, lambda, kept), (acc_ref, lambda_ref, kept_ref)] = &mut outputs;
                 let [add, add_ref] = &mut added;
+                let given = (first, &x[..], &v[..], &f[..]);
                 // SAFETY: the processor has AVX2.
-                unsafe { first_pass(model, (&x, &v, &f), (acc, lambda, kept), record(add)) };
+                unsafe { first_pass(model, given, (acc, lambda, kept), record(add)) };
                 let out = (&mut acc_ref[..], &mut lambda_ref[..], &mut kept_ref[..]);
-                super::super::first_response(model, (0, &x, &v, &f), out, record(add_ref));
-                assert_eq!(add, add_ref, "{}: K's additions", model.scene.name);
-                assert_same(&outputs, &model.scene.name);
+                super::super::first_response(model, given, out, record(add_ref));
+                let what = format!("{} bars {bars:?}", model.scene.name);
+                assert_eq!(add, add_ref, "{what}: K's additions");
+                assert_eq!(
+                    add.len(),
+                    bars.clone()
+                        .filter(|&i| !model.coords.static_bar[i])
+                        .count()
+                );
+                assert_same(&outputs, &what);
                 // The second pass with other forces.
                 let f = vectors(n, &mut next);
                 let [(acc, lambda, kept), (acc_ref, lambda_ref, kept_ref)] = &mut outputs;
                 // SAFETY: the processor has AVX2.
-                unsafe { second_pass(model, (kept, &f), (acc, lambda)) };
-                let per_bar = (&model.coords.static_bar[..], &model.inertia[..]);
-                super::super::second_response(per_bar, (kept_ref, &f), (acc_ref, lambda_ref));
-                assert_same(&outputs, &model.scene.name);
+                unsafe { second_pass(model, (first, kept, &f), (acc, lambda)) };
+                super::super::second_response(model, (first, kept_ref, &f), (acc_ref, lambda_ref));
+                assert_same(&outputs, &what);
             }
         }
     }

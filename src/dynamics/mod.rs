@@ -371,18 +371,36 @@ pub fn bar_response(model: &Model, ws: &mut Workspace) {
             reactions.add_bar(i, bv, inv_l2);
         }
     };
-    let given = (pairs(end_pos), pairs(end_vel), pairs(end_force));
+    let given = (0, pairs(end_pos), pairs(end_vel), pairs(end_force));
     let out = (
         pairs_mut(end_acc),
         lambda.as_mut_slice(),
         bars.as_mut_slice(),
     );
+    first_responses(model, given, out, add_bar);
+}
+
+/// The first λ pass over a run of bars, four at a time in AVX2 lanes where the processor
+/// has it ([`bar_lanes`]), else [`first_response`].
+#[inline(always)]
+#[allow(clippy::type_complexity)]
+fn first_responses(
+    model: &Model,
+    given: (
+        usize,
+        &[[Vector3<f64>; 2]],
+        &[[Vector3<f64>; 2]],
+        &[[Vector3<f64>; 2]],
+    ),
+    out: (&mut [[Vector3<f64>; 2]], &mut [f64], &mut [BarKept]),
+    add_bar: impl FnMut(usize, &Vector3<f64>, f64),
+) {
     #[cfg(target_arch = "x86_64")]
     if std::arch::is_x86_feature_detected!("avx2") {
         // SAFETY: the processor has AVX2.
         return unsafe { bar_lanes::first_pass(model, given, out, add_bar) };
     }
-    first_response(model, (0, given.0, given.1, given.2), out, add_bar);
+    first_response(model, given, out, add_bar);
 }
 
 /// The first λ pass over a run of bars from bar `first` on (given their end positions,
@@ -432,26 +450,38 @@ fn first_response(
 /// from what [`bar_response`] kept.
 #[inline(always)]
 fn bar_response_again(model: &Model, ws: &mut Workspace) {
-    let given = (ws.bars.as_slice(), pairs(&ws.end_force));
-    let out = (pairs_mut(&mut ws.end_acc), ws.lambda.as_mut_slice());
+    let given = (0, ws.bars.as_slice(), pairs(&ws.end_force));
+    second_responses(model, given, (pairs_mut(&mut ws.end_acc), &mut ws.lambda));
+}
+
+/// The second λ pass over a run of bars, four at a time in AVX2 lanes where the processor
+/// has it ([`bar_lanes`]), else [`second_response`].
+#[inline(always)]
+fn second_responses(
+    model: &Model,
+    given: (usize, &[BarKept], &[[Vector3<f64>; 2]]),
+    out: (&mut [[Vector3<f64>; 2]], &mut [f64]),
+) {
     #[cfg(target_arch = "x86_64")]
     if std::arch::is_x86_feature_detected!("avx2") {
         // SAFETY: the processor has AVX2.
         return unsafe { bar_lanes::second_pass(model, given, out) };
     }
-    let per_bar = (model.coords.static_bar.as_slice(), model.inertia.as_slice());
-    second_response(per_bar, given, out);
+    second_response(model, given, out);
 }
 
-/// [`bar_response_again`] for a run of bars.
+/// The second λ pass over a run of bars from bar `first` on, bar by bar.
 #[inline(always)]
 fn second_response(
-    (static_bar, inertia): (&[bool], &[crate::model::inertia::BarInertia]),
-    (bars, end_force): (&[BarKept], &[[Vector3<f64>; 2]]),
+    model: &Model,
+    (first, bars, end_force): (usize, &[BarKept], &[[Vector3<f64>; 2]]),
     (end_acc, lambda): (&mut [[Vector3<f64>; 2]], &mut [f64]),
 ) {
+    let range = first..first + bars.len();
+    let per_bar = model.coords.static_bar[range.clone()]
+        .iter()
+        .zip(&model.inertia[range]);
     let out = end_acc.iter_mut().zip(lambda);
-    let per_bar = static_bar.iter().zip(inertia);
     let inputs = bars.iter().zip(end_force);
     for (((&fixed, inertia), (cached, f)), (acc, lambda)) in per_bar.zip(inputs).zip(out) {
         if !fixed {

@@ -29,7 +29,7 @@ use handoff::Handoff;
 pub use helper::{on_helper_thread, Helper};
 
 use super::effects::{self, ForceSink};
-use super::{first_response, pairs, pairs_mut, Inputs, Workspace};
+use super::{first_responses, pairs, pairs_mut, Inputs, Workspace};
 use crate::model::block_cholesky::BlockLdl;
 use crate::model::Model;
 
@@ -194,7 +194,7 @@ pub(super) fn evaluate(
             let (amax0, amax1) = helper.join(
                 || {
                     let mut amax: f64 = 0.0;
-                    first_response(model, given(0..b), (acc0, l0, k0), |i, bv, l2| {
+                    first_responses(model, given(0..b), (acc0, l0, k0), |i, bv, l2| {
                         if let Some(r) = shared {
                             // SAFETY: the first half's blocks; the second half's terms
                             // on them wait (`deferred`).
@@ -206,7 +206,7 @@ pub(super) fn evaluate(
                 || {
                     let mut amax: f64 = 0.0;
                     let n = model.bars.len();
-                    first_response(model, given(b..n), (acc1, l1, k1), |i, bv, l2| {
+                    first_responses(model, given(b..n), (acc1, l1, k1), |i, bv, l2| {
                         if let Some(r) = shared {
                             // SAFETY: the second half's own blocks.
                             amax = amax.max(unsafe { r.add_bar(i, bv, l2, |c| deferred[c]) });
@@ -282,19 +282,12 @@ pub(super) fn evaluate(
                 super::add_reactions(ws);
             }
             // Stage 5: λ and the end accelerations again, and their scatter.
-            let per_bar = (&coords.static_bar, &model.inertia);
             let (acc0, acc1) = pairs_mut(&mut ws.end_acc).split_at_mut(b);
             let (l0, l1) = ws.lambda.split_at_mut(b);
             let (kept, forces) = (ws.bars.as_slice(), pairs(&ws.end_force));
             helper.join(
-                || {
-                    let given = (&kept[..b], &forces[..b]);
-                    super::second_response((&per_bar.0[..b], &per_bar.1[..b]), given, (acc0, l0))
-                },
-                || {
-                    let given = (&kept[b..], &forces[b..]);
-                    super::second_response((&per_bar.0[b..], &per_bar.1[b..]), given, (acc1, l1))
-                },
+                || super::second_responses(model, (0, &kept[..b], &forces[..b]), (acc0, l0)),
+                || super::second_responses(model, (b, &kept[b..], &forces[b..]), (acc1, l1)),
             );
         }
         // The accelerations of the reduced nodes; the second half skips those the first
