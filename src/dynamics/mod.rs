@@ -296,12 +296,13 @@ fn end_states(
     let (q, v) = (q.as_chunks::<3>().0, v.as_chunks::<3>().0);
     let ends = end_pos.iter_mut().zip(end_vel.iter_mut());
     for ((term, fixed), (x, xdot)) in single.iter().zip(fixed).zip(ends) {
-        *x = *fixed;
-        *xdot = Vector3::zeros();
+        // Summed in locals and stored once: summed in place, each sum went through memory.
+        let (mut at, mut rate) = (*fixed, Vector3::zeros());
         if let Some((g, c)) = *term {
-            *x += Vector3::from(q[g]) * c;
-            *xdot += Vector3::from(v[g]) * c;
+            at += Vector3::from(q[g]) * c;
+            rate += Vector3::from(v[g]) * c;
         }
+        (*x, *xdot) = (at, rate);
     }
 }
 
