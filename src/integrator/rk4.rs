@@ -25,10 +25,52 @@ impl Rk4 {
 fn set_stage(rhs: &dyn Rhs, stage: &mut [f64], y: &[f64], c: f64, k: &[f64]) {
     rhs.for_each_half(stage, &|start, s| {
         let part = start..start + s.len();
-        for ((s, y), k) in s.iter_mut().zip(&y[part.clone()]).zip(&k[part]) {
+        stage_part(s, &y[part.clone()], c, &k[part]);
+    });
+}
+
+/// `s = y + c k` over a part.
+fn stage_part(s: &mut [f64], y: &[f64], c: f64, k: &[f64]) {
+    #[inline(always)]
+    fn kernel(s: &mut [f64], y: &[f64], c: f64, k: &[f64]) {
+        for ((s, y), k) in s.iter_mut().zip(y).zip(k) {
             *s = y + c * k;
         }
-    });
+    }
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    fn kernel_avx2(s: &mut [f64], y: &[f64], c: f64, k: &[f64]) {
+        kernel(s, y, c, k);
+    }
+    #[cfg(target_arch = "x86_64")]
+    if std::arch::is_x86_feature_detected!("avx2") {
+        // SAFETY: the processor has AVX2.
+        return unsafe { kernel_avx2(s, y, c, k) };
+    }
+    kernel(s, y, c, k);
+}
+
+/// `y += h/6 (k₁ + 2k₂ + 2k₃ + k₄)` over a part.
+fn combine_part(y: &mut [f64], h: f64, [k1, k2, k3, k4]: [&[f64]; 4]) {
+    #[inline(always)]
+    fn kernel(y: &mut [f64], h: f64, [k1, k2, k3, k4]: [&[f64]; 4]) {
+        let k12 = k1.iter().zip(k2);
+        let k34 = k3.iter().zip(k4);
+        for (y, ((a, b), (c, d))) in y.iter_mut().zip(k12.zip(k34)) {
+            *y += h / 6.0 * (a + 2.0 * b + 2.0 * c + d);
+        }
+    }
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    fn kernel_avx2(y: &mut [f64], h: f64, k: [&[f64]; 4]) {
+        kernel(y, h, k);
+    }
+    #[cfg(target_arch = "x86_64")]
+    if std::arch::is_x86_feature_detected!("avx2") {
+        // SAFETY: the processor has AVX2.
+        return unsafe { kernel_avx2(y, h, [k1, k2, k3, k4]) };
+    }
+    kernel(y, h, [k1, k2, k3, k4]);
 }
 
 impl Integrator for Rk4 {
@@ -44,11 +86,8 @@ impl Integrator for Rk4 {
         let (k1, k2, k3, k4) = (&*k1, &*k2, &*k3, &*k4);
         rhs.for_each_half(y, &|start, y| {
             let part = start..start + y.len();
-            let k12 = k1[part.clone()].iter().zip(&k2[part.clone()]);
-            let k34 = k3[part.clone()].iter().zip(&k4[part]);
-            for (y, ((a, b), (c, d))) in y.iter_mut().zip(k12.zip(k34)) {
-                *y += h / 6.0 * (a + 2.0 * b + 2.0 * c + d);
-            }
+            let k = [k1, k2, k3, k4].map(|k| &k[part.clone()]);
+            combine_part(y, h, k);
         });
         self.evaluations += 4;
         Outcome::Accepted { next: h }
