@@ -1,9 +1,10 @@
 //! Both λ passes four bars at a time, one bar per lane of an AVX2 register.
 //!
-//! Lane by lane the arithmetic is the bar-by-bar code's ([`super::response`] and the lines
-//! of [`super::bar_response`] before it), in the same order and with no fused multiply-add,
-//! so the results are the same bits. A group of four with a static bar, and the last
-//! partial group, are taken bar by bar. K's blocks are still added bar by bar, in order.
+//! Lane by lane the arithmetic is the bar-by-bar code's ([`super::first_response`],
+//! [`super::second_response`] and their [`super::response`]), in the same order and with no
+//! fused multiply-add, so the results are the same bits. Groups are bars `4g..4g + 4`; a
+//! group with a static bar, and a run's bars before its first whole group and after its
+//! last, are taken bar by bar. `add_bar` (K's blocks) is still called bar by bar, in order.
 
 use std::arch::x86_64::{
     __m256d, _mm256_add_pd, _mm256_div_pd, _mm256_loadu2_m128d, _mm256_loadu_pd, _mm256_mul_pd,
@@ -42,11 +43,14 @@ pub(super) unsafe fn first_pass(
     mut add_bar: impl FnMut(usize, &Vector3<f64>, f64),
 ) {
     let cut = aligned(first, x.len());
-    let ([x0, x1, x2], [v0, v1, v2], [f0, f1, f2]) =
-        (thirds(x, cut), thirds(v, cut), thirds(f, cut));
-    let [a0, a1, a2] = thirds_mut(acc, cut);
-    let [l0, l1, l2] = thirds_mut(lambda, cut);
-    let [k0, k1, k2] = thirds_mut(kept, cut);
+    let ([x0, x1, x2], [v0, v1, v2], [f0, f1, f2]) = (
+        head_groups_tail(x, cut),
+        head_groups_tail(v, cut),
+        head_groups_tail(f, cut),
+    );
+    let [a0, a1, a2] = head_groups_tail_mut(acc, cut);
+    let [l0, l1, l2] = head_groups_tail_mut(lambda, cut);
+    let [k0, k1, k2] = head_groups_tail_mut(kept, cut);
     super::first_response(model, (first, x0, v0, f0), (a0, l0, k0), &mut add_bar);
     let given = x1
         .as_chunks::<4>()
@@ -58,10 +62,10 @@ pub(super) unsafe fn first_pass(
     let out = out.zip(l1.as_chunks_mut().0).zip(k1.as_chunks_mut().0);
     let start = first + cut[0];
     let groups = model.inertia_lanes[start / 4..].iter().zip(given.zip(out));
-    for (g, (lanes, (((x, v), f), ((acc, lambda), kept)))) in groups.enumerate() {
+    for (g, (group, (((x, v), f), ((acc, lambda), kept)))) in groups.enumerate() {
         let bar = start + 4 * g;
-        if lanes.moving {
-            let inv_l2 = first_response(lanes, (x, v), f, (acc, lambda, kept));
+        if group.moving {
+            let inv_l2 = four_first(group, (x, v), f, (acc, lambda, kept));
             for (l, kept) in kept.iter().enumerate() {
                 add_bar(bar + l, &kept.0, inv_l2[l]);
             }
@@ -86,17 +90,20 @@ pub(super) unsafe fn second_pass(
     (acc, lambda): (&mut [Ends], &mut [f64]),
 ) {
     let cut = aligned(first, kept.len());
-    let ([k0, k1, k2], [f0, f1, f2]) = (thirds(kept, cut), thirds(f, cut));
-    let ([a0, a1, a2], [l0, l1, l2]) = (thirds_mut(acc, cut), thirds_mut(lambda, cut));
+    let ([k0, k1, k2], [f0, f1, f2]) = (head_groups_tail(kept, cut), head_groups_tail(f, cut));
+    let ([a0, a1, a2], [l0, l1, l2]) = (
+        head_groups_tail_mut(acc, cut),
+        head_groups_tail_mut(lambda, cut),
+    );
     super::second_response(model, (first, k0, f0), (a0, l0));
     let given = k1.as_chunks::<4>().0.iter().zip(f1.as_chunks().0);
     let out = a1.as_chunks_mut::<4>().0.iter_mut();
     let out = out.zip(l1.as_chunks_mut().0);
     let start = first + cut[0];
     let groups = model.inertia_lanes[start / 4..].iter().zip(given.zip(out));
-    for (g, (lanes, ((kept, f), (acc, lambda)))) in groups.enumerate() {
-        if lanes.moving {
-            response(lanes, kept, f, (acc, lambda));
+    for (g, (group, ((kept, f), (acc, lambda)))) in groups.enumerate() {
+        if group.moving {
+            four_again(group, kept, f, (acc, lambda));
         } else {
             super::second_response(model, (start + 4 * g, kept, f), (acc, lambda));
         }
@@ -111,26 +118,24 @@ fn aligned(first: usize, n: usize) -> [usize; 2] {
     [head, head + (n - head) / 4 * 4]
 }
 
-fn thirds<T>(s: &[T], [a, b]: [usize; 2]) -> [&[T]; 3] {
+/// A run's slice cut where [`aligned`] says: before, in and after its whole groups.
+fn head_groups_tail<T>(s: &[T], [a, b]: [usize; 2]) -> [&[T]; 3] {
     let (s, tail) = s.split_at(b);
     let (head, middle) = s.split_at(a);
     [head, middle, tail]
 }
 
-fn thirds_mut<T>(s: &mut [T], [a, b]: [usize; 2]) -> [&mut [T]; 3] {
+fn head_groups_tail_mut<T>(s: &mut [T], [a, b]: [usize; 2]) -> [&mut [T]; 3] {
     let (s, tail) = s.split_at_mut(b);
     let (head, middle) = s.split_at_mut(a);
     [head, middle, tail]
 }
 
 /// λ and the end accelerations of the four bars of `inertia` for end forces `f`, with
-/// `(b, −|ḃ|², 1/((β − α)|b|²))` given per bar in `kept`.
-///
-/// # Safety
-/// The processor has AVX2.
+/// `(b, −|ḃ|², 1/((β − α)|b|²))` given per bar in `kept` (the second pass).
 #[inline]
 #[target_feature(enable = "avx2")]
-unsafe fn response(
+fn four_again(
     inertia: &InertiaLanes,
     kept: &[BarKept; 4],
     f: &[Ends; 4],
@@ -148,12 +153,9 @@ unsafe fn response(
 
 /// The first pass for four moving bars: their `kept` values, λ and end accelerations;
 /// returns `1/|b|²` per lane (for K).
-///
-/// # Safety
-/// The processor has AVX2.
 #[inline]
 #[target_feature(enable = "avx2")]
-unsafe fn first_response(
+fn four_first(
     inertia: &InertiaLanes,
     (x, v): (&[Ends; 4], &[Ends; 4]),
     f: &[Ends; 4],

@@ -274,6 +274,27 @@ impl Coordinates {
         x
     }
 
+    /// [`Self::end_vector`] of the positions (`offset`) of ends `first..first + out.len()`,
+    /// by the same arithmetic, in one loop over the sparse basis where there is one (end by
+    /// end, the switch location's pass took 1.6% of tower20's instructions, so 1.0%).
+    pub fn end_positions(&self, first: usize, eta: &[f64], out: &mut [Vector3<f64>]) {
+        let Some(single) = &self.single else {
+            for (e, x) in (first..).zip(out) {
+                *x = self.end_vector_csr(e, eta, true);
+            }
+            return;
+        };
+        let eta = eta.as_chunks::<3>().0;
+        let basis = single[first..].iter().zip(&self.fixed[first..]);
+        for (x, (term, fixed)) in out.iter_mut().zip(basis) {
+            let mut at = *fixed;
+            if let Some((g, c)) = *term {
+                at += Vector3::from(eta[g]) * c;
+            }
+            *x = at;
+        }
+    }
+
     /// Component `axis` of [`Self::end_vector`], by the same arithmetic (so the same bits).
     #[inline]
     pub fn end_component(&self, e: End, eta: &[f64], offset: bool, axis: usize) -> f64 {

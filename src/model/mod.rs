@@ -108,7 +108,8 @@ pub struct Model {
     pub payload: Vec<f64>,
     /// Inverse mass data per bar (rod plus payloads).
     pub inertia: Vec<BarInertia>,
-    /// The same, four bars to a group, for the step's λ passes.
+    /// The same, four bars to a group, for the step's λ passes (derived from `inertia` and
+    /// `coords.static_bar` by [`InertiaLanes::groups`]; rebuild it after changing either).
     pub inertia_lanes: Vec<InertiaLanes>,
     /// The ground plane, if the scene has one.
     pub ground: Option<Ground>,

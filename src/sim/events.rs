@@ -277,26 +277,7 @@ impl Events {
 /// them: the ends are independent).
 fn end_positions(model: &Model, y: &[f64], x: &mut [Vector3<f64>], ws: &Workspace) {
     let q = &y[..y.len() / 2];
-    let coords = &model.coords;
-    ws.for_each_half(x, |start, x| {
-        let Some(single) = &coords.single else {
-            for (e, x) in (start..).zip(x) {
-                *x = coords.end_vector(e, q, true);
-            }
-            return;
-        };
-        // `end_vector`'s arithmetic in one loop over the sparse basis (tower20: this pass
-        // took 1.6% of the instructions end by end, 1.0% so).
-        let q = q.as_chunks::<3>().0;
-        let basis = single[start..].iter().zip(&coords.fixed[start..]);
-        for (x, (term, fixed)) in x.iter_mut().zip(basis) {
-            let mut at = *fixed;
-            if let Some((g, c)) = *term {
-                at += Vector3::from(q[g]) * c;
-            }
-            *x = at;
-        }
-    });
+    ws.for_each_half(x, |start, x| model.coords.end_positions(start, q, x));
 }
 
 /// Whether each switch is positive at the bar-end positions `x` (as [`end_positions`]).
