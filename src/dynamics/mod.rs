@@ -354,7 +354,11 @@ pub fn cable_force_density(
 #[inline(always)]
 pub fn bar_response(model: &Model, ws: &mut Workspace) {
     let with_reactions = !model.pipeline.constraints.is_empty();
-    if with_reactions {
+    // K from the bar vectors the pass keeps, after it, where bars are assembled several at
+    // a time; else bar by bar inside it.
+    let bundled = with_reactions && ws.reactions.assembles_in_bundles();
+    let bar_by_bar = with_reactions && !bundled;
+    if bar_by_bar {
         ws.reactions.clear();
     }
     let Workspace {
@@ -368,7 +372,7 @@ pub fn bar_response(model: &Model, ws: &mut Workspace) {
         ..
     } = ws;
     let add_bar = |i: usize, bv: &Vector3<f64>, inv_l2: f64| {
-        if with_reactions {
+        if bar_by_bar {
             reactions.add_bar(i, bv, inv_l2);
         }
     };
@@ -379,6 +383,9 @@ pub fn bar_response(model: &Model, ws: &mut Workspace) {
         bars.as_mut_slice(),
     );
     first_responses(model, given, out, add_bar);
+    if bundled {
+        assemble_kept(reactions, bars);
+    }
 }
 
 /// The first λ pass over a run of bars, four at a time in AVX2 lanes where the processor
@@ -523,11 +530,9 @@ fn pairs_mut(ends: &mut [Vector3<f64>]) -> &mut [[Vector3<f64>; 2]] {
 /// K assembled again from the bar vectors [`bar_response`] kept (the same arithmetic, so
 /// the same K), after a factor may have overwritten it. A static bar's entry is never set, but it has
 /// no blocks either: `add_bar` returns.
+#[inline(always)]
 fn assemble_kept(r: &mut Reactions, bars: &[BarKept]) {
-    r.clear();
-    for (i, (bv, _, _)) in bars.iter().enumerate() {
-        r.add_bar(i, bv, 1.0 / bv.norm_squared());
-    }
+    r.assemble_bars(|i| bars[i].0);
 }
 
 /// Stage 4: reactions Ω from `N̈ P = 0` (K assembled by [`bar_response`]), added to the end

@@ -13,7 +13,7 @@ use nalgebra::Matrix3;
 use super::block_cholesky::{summed, BlockLdl, Pattern, Symmetric};
 
 /// Parts per group.
-const LANES: usize = 4;
+pub(super) const LANES: usize = 4;
 
 /// The most memory the lanes' K and factor may take. Beyond it (about 4,000 tower bars)
 /// the 4-wide arrays stream from L3 or memory and cost more than the lanes save (`bench`,
@@ -21,9 +21,30 @@ const LANES: usize = 4;
 /// 1.27× at 60,000, measured when the lanes gathered a copy of the scalar K), so larger
 /// systems keep the scalar factor.
 const MAX_BYTES: usize = 2 << 20;
-type Lanes = [f64; LANES];
+/// One value per lane, aligned to 32 bytes so that no lane-wise load or store straddles two
+/// cache lines (unaligned, every other entry of a block did, and a store to one did not
+/// pass its value on to the next load of it).
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[repr(C, align(32))]
+pub(super) struct Lanes(pub [f64; LANES]);
+
+impl std::ops::Deref for Lanes {
+    type Target = [f64; LANES];
+    fn deref(&self) -> &Self::Target {
+        &self.0
+    }
+}
+
+impl std::ops::DerefMut for Lanes {
+    fn deref_mut(&mut self) -> &mut Self::Target {
+        &mut self.0
+    }
+}
+
+/// All lanes zero.
+const ZERO: Lanes = Lanes([0.0; LANES]);
 /// One 3 × 3 block per lane, entry (i, j) at `3 j + i` (nalgebra's order).
-type Block = [Lanes; 9];
+pub(super) type Block = [Lanes; 9];
 
 /// K's parts in groups of identical ones. K is assembled straight into the groups'
 /// layout (no gather before each factor).
@@ -142,7 +163,7 @@ impl LaneGroups {
         }
         // Unused lanes: identity pivots and zero blocks (updates subtract zero products).
         let slots = pattern.l_rows.len();
-        self.k.resize(k_start + slots, [[0.0; LANES]; 9]);
+        self.k.resize(k_start + slots, [ZERO; 9]);
         for c in 0..m {
             for e in [0, 4, 8] {
                 self.k[k_start + pattern.l_start[c]][e][parts.len()..].fill(1.0);
@@ -152,9 +173,9 @@ impl LaneGroups {
             columns,
             k_start,
             used: parts.len(),
-            l: vec![[[0.0; LANES]; 9]; slots],
-            d_inv: vec![[[0.0; LANES]; 9]; m],
-            rhs: vec![[[0.0; LANES]; 3]; m],
+            l: vec![[ZERO; 9]; slots],
+            d_inv: vec![[ZERO; 9]; m],
+            rhs: vec![[ZERO; 3]; m],
             pattern,
         });
         Some(())
@@ -181,6 +202,35 @@ impl LaneGroups {
         }
     }
 
+    /// Where K's block at `slot` of the scalar layout lies: its block of the lanes and its
+    /// lane.
+    pub(super) fn position(&self, slot: usize) -> (usize, usize) {
+        let at = self.lane_of[slot];
+        (at / LANES, at % LANES)
+    }
+
+    /// How many lanes of the lanes' block `block` hold a part (the others hold only 0 and
+    /// the 1 of identity pivots, before and after a factor).
+    pub(super) fn used_lanes(&self, block: usize) -> usize {
+        let group = self
+            .groups
+            .iter()
+            .find(|g| (g.k_start..g.k_start + g.l.len()).contains(&block));
+        group.expect("a block of some group").used
+    }
+
+    /// The lanes' block `block` of K, to assemble into.
+    pub(super) fn block_mut(&mut self, block: usize) -> &mut Block {
+        &mut self.k[block]
+    }
+
+    /// Every lane of K's blocks, unused lanes included, as bits.
+    #[cfg(test)]
+    pub(super) fn k_bits(&self) -> Vec<u64> {
+        let entries = self.k.iter().flatten().flat_map(|lanes| lanes.0);
+        entries.map(f64::to_bits).collect()
+    }
+
     /// The block of `slot` and its lane (masked, so that indexing needs no check).
     #[inline(always)]
     fn entries(&mut self, slot: usize) -> (&mut Block, usize) {
@@ -201,7 +251,7 @@ impl LaneGroups {
     fn diagonal_amax(&self) -> f64 {
         let mut scale: f64 = 0.0;
         for group in &self.groups {
-            let mut lane_max: Lanes = [0.0; LANES];
+            let mut lane_max = ZERO;
             let pattern = &group.pattern;
             for &d in &pattern.l_start[..group.columns.len()] {
                 let block = &self.k[group.k_start + d];
@@ -330,8 +380,8 @@ impl LaneGroup {
 
 /// A lane-wise value.
 #[inline(always)]
-fn lanes(f: impl Fn(usize) -> f64) -> Lanes {
-    std::array::from_fn(f)
+pub(super) fn lanes(f: impl Fn(usize) -> f64) -> Lanes {
+    Lanes(std::array::from_fn(f))
 }
 
 /// `s −= a bᵀ` (only the lower triangle for a pivot), each entry as the scalar kernel sums it.

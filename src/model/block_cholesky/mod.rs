@@ -19,7 +19,7 @@ const SINGULAR: f64 = 1e-12;
 /// (2, 0), (1, 1), (2, 1), (2, 2).
 pub type Symmetric = [f64; 6];
 /// Where each entry of a [`Symmetric`] is in a column-major 3 × 3 block.
-const LOWER: [usize; 6] = [0, 1, 2, 4, 5, 8];
+pub(super) const LOWER: [usize; 6] = [0, 1, 2, 4, 5, 8];
 /// Which entry of a [`Symmetric`] each entry of a column-major 3 × 3 block is.
 pub(super) const SYMMETRIC: [usize; 9] = [0, 1, 2, 1, 3, 4, 2, 4, 5];
 
@@ -376,6 +376,22 @@ impl BlockLdl {
             })
             .collect();
         super::block_lanes::components(self.n, &blocks)
+    }
+
+    /// The side-by-side chains, when K lives in them.
+    pub(super) fn lanes_mut(&mut self) -> Option<&mut LaneGroups> {
+        self.lanes.as_deref_mut()
+    }
+
+    /// Where K's block at `slot` lies in the side-by-side chains (block, lane), if K lives
+    /// in them.
+    pub(super) fn lane_position(&self, slot: usize) -> Option<(usize, usize)> {
+        self.lanes.as_ref().map(|lanes| lanes.position(slot))
+    }
+
+    /// How many lanes of the lanes' block `block` hold a part, if K lives in the lanes.
+    pub(super) fn used_lanes(&self, block: usize) -> Option<usize> {
+        self.lanes.as_ref().map(|lanes| lanes.used_lanes(block))
     }
 
     /// Whether identical chains are factored side by side (then K lives in the lanes).

@@ -8,9 +8,13 @@
 
 use nalgebra::{DMatrix, DVector, Matrix3, Vector3};
 
+mod lanes;
+
 use super::block_cholesky::{BlockLdl, SharedFactor, Symmetric, SYMMETRIC};
+use super::block_lanes::LaneGroups;
 use super::coords::Coordinates;
 use super::inertia::BarInertia;
+use lanes::LaneAssembly;
 
 /// A constraint column touching a bar: (column, coefficient, end side 0/1).
 type Term = (usize, f64, usize);
@@ -89,6 +93,9 @@ pub struct Reactions {
     unassigned: Vec<usize>,
     /// Per constraint column of the coordinates, its number in the system.
     internal: Vec<usize>,
+    /// Bars assembled several at a time into the side-by-side chains, where K lives in them
+    /// and bars make bundles.
+    lane_assembly: Option<LaneAssembly>,
 }
 
 impl Reactions {
@@ -185,6 +192,15 @@ impl Reactions {
             terms.extend_from_slice(&coords.constraints[c].terms);
             term_start.push(terms.len());
         }
+        let lane_assembly = match &solver {
+            Solver::Sparse(chol) if chol.has_lanes() => {
+                let of = |bar: usize| &contributions[bar_start[bar]..bar_start[bar + 1]];
+                let position = |slot| chol.lane_position(slot).expect("K is in the lanes");
+                let used = |block| chol.used_lanes(block).expect("K is in the lanes");
+                LaneAssembly::new(n_bars, of, position, used)
+            }
+            _ => None,
+        };
         Self {
             n,
             bar_start,
@@ -195,6 +211,7 @@ impl Reactions {
             terms,
             unassigned,
             internal,
+            lane_assembly,
         }
     }
 
@@ -211,6 +228,7 @@ impl Reactions {
         if let Solver::Sparse(chol) = self.solver {
             self.solver = Solver::Sparse(Box::new(chol.without_lanes()));
         }
+        self.lane_assembly = None;
         self
     }
 
@@ -232,6 +250,56 @@ impl Reactions {
         for (bar, u) in units.iter().enumerate() {
             self.add_bar(bar, u, 1.0);
         }
+    }
+
+    /// Assembles K for the bar vectors `b(bar)`, as [`Self::add_bar`] of every bar in order
+    /// with `1/|b|²` would (the same bits), several bars at a time where they make bundles
+    /// in the side-by-side chains.
+    #[inline(always)]
+    pub fn assemble_bars(&mut self, b: impl Fn(usize) -> Vector3<f64>) {
+        #[cfg(target_arch = "x86_64")]
+        let avx2 = std::arch::is_x86_feature_detected!("avx2");
+        #[cfg(not(target_arch = "x86_64"))]
+        let avx2 = false;
+        self.assemble_bars_with(b, avx2);
+    }
+
+    /// [`Self::assemble_bars`], the bundles in AVX2 if `avx2` (the processor has it).
+    #[inline(always)]
+    fn assemble_bars_with(&mut self, b: impl Fn(usize) -> Vector3<f64>, avx2: bool) {
+        self.clear();
+        let bars = self.bar_start.len() - 1;
+        let Self {
+            solver,
+            contributions,
+            bar_start,
+            lane_assembly,
+            ..
+        } = self;
+        if let (Some(assembly), Solver::Sparse(chol)) = (lane_assembly, solver) {
+            let lanes_k = chol
+                .lanes_mut()
+                .expect("bundles only where K is in the lanes");
+            let of = |bar: usize| &contributions[bar_start[bar]..bar_start[bar + 1]];
+            let add_bar = |lanes_k: &mut LaneGroups, bar, bv: &Vector3<f64>, inv_l2| {
+                let bb = outer_lower(bv);
+                for c in of(bar) {
+                    lanes_k.put_symmetric(c.slot, &c.block(&bb, inv_l2), c.first);
+                }
+            };
+            assembly.assemble(lanes_k, b, add_bar, avx2);
+            return;
+        }
+        for bar in 0..bars {
+            let bv = b(bar);
+            self.add_bar(bar, &bv, 1.0 / bv.norm_squared());
+        }
+    }
+
+    /// Whether [`Self::assemble_bars`] takes bars several at a time (then the first λ pass
+    /// leaves K to it).
+    pub fn assembles_in_bundles(&self) -> bool {
+        self.lane_assembly.is_some()
     }
 
     /// Sets the right-hand side to `−N̈ P` for the end accelerations without reactions.

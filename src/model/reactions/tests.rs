@@ -99,3 +99,64 @@ fn the_towers_chains_go_side_by_side() {
         assert_eq!(reactions.side_by_side(), expected, "{stages} stages");
     }
 }
+
+/// K assembled several bars at a time into the side-by-side chains is the bits of K
+/// assembled bar by bar: tower20 with an inertia of its own per bar, at bar vectors of
+/// every sign and magnitude, twice in a row (the second assembly sets and adds to blocks
+/// the first left), through the AVX2 code and the bar-by-bar fallback.
+#[test]
+fn bundled_assembly_gives_the_bits_of_bar_by_bar() {
+    #[cfg(target_arch = "x86_64")]
+    if !std::arch::is_x86_feature_detected!("avx2") {
+        eprintln!("no AVX2 here: only the fallback is compared");
+    }
+    let model = Model::new(&crate::scene::builtin("tower20").unwrap()).unwrap();
+    let inertia: Vec<BarInertia> = (0..model.inertia.len())
+        .map(|i| BarInertia::new(1.0 + 0.1 * i as f64, [0.02 * i as f64, 0.3]))
+        .collect();
+    let mut bundled = Reactions::new(&model.coords, &inertia, false);
+    let mut bar_by_bar = bundled.clone();
+    assert!(bundled.assembles_in_bundles());
+    let bundles = bundled.lane_assembly.as_ref().unwrap().bundles();
+    assert_eq!(bundles, 20, "a bundle per stage");
+    let slots = match &bundled.solver {
+        Solver::Sparse(chol) => chol.slots(),
+        Solver::Dense(_) => unreachable!(),
+    };
+    let block = |r: &Reactions, slot: usize| match &r.solver {
+        Solver::Sparse(chol) => chol.block(slot),
+        Solver::Dense(_) => unreachable!(),
+    };
+    for (round, avx2) in [(0, true), (1, true), (2, false)] {
+        let b = |bar: usize| {
+            let f = (bar * 3 + round * 7) as f64;
+            Vector3::new(
+                (f * 0.7).sin() * 2.0,
+                (f * 1.3).cos() * 0.01,
+                -(f * 0.3).sin(),
+            )
+        };
+        let avx2 = avx2 && std::arch::is_x86_feature_detected!("avx2");
+        bundled.assemble_bars_with(b, avx2);
+        bar_by_bar.clear();
+        for bar in 0..model.bars.len() {
+            let bv = b(bar);
+            bar_by_bar.add_bar(bar, &bv, 1.0 / bv.norm_squared());
+        }
+        for slot in 0..slots {
+            let (x, y) = (block(&bundled, slot), block(&bar_by_bar, slot));
+            for (x, y) in x.iter().zip(y.iter()) {
+                assert_eq!(x.to_bits(), y.to_bits(), "round {round}, slot {slot}");
+            }
+        }
+        // The lanes without a part (identity pivots, zero blocks) are kept too.
+        let lane_bits = |r: &mut Reactions| match &mut r.solver {
+            Solver::Sparse(chol) => chol.lanes_mut().unwrap().k_bits(),
+            Solver::Dense(_) => unreachable!(),
+        };
+        assert!(
+            lane_bits(&mut bundled) == lane_bits(&mut bar_by_bar),
+            "round {round}"
+        );
+    }
+}
