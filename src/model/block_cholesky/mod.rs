@@ -383,15 +383,9 @@ impl BlockLdl {
         self.lanes.as_deref_mut()
     }
 
-    /// Where K's block at `slot` lies in the side-by-side chains (block, lane), if K lives
-    /// in them.
-    pub(super) fn lane_position(&self, slot: usize) -> Option<(usize, usize)> {
-        self.lanes.as_ref().map(|lanes| lanes.position(slot))
-    }
-
-    /// How many lanes of the lanes' block `block` hold a part, if K lives in the lanes.
-    pub(super) fn used_lanes(&self, block: usize) -> Option<usize> {
-        self.lanes.as_ref().map(|lanes| lanes.used_lanes(block))
+    /// The side-by-side chains, when K lives in them (for their layout).
+    pub(super) fn lanes(&self) -> Option<&LaneGroups> {
+        self.lanes.as_deref()
     }
 
     /// Whether identical chains are factored side by side (then K lives in the lanes).

@@ -193,13 +193,12 @@ impl Reactions {
             term_start.push(terms.len());
         }
         let lane_assembly = match &solver {
-            Solver::Sparse(chol) if chol.has_lanes() => {
+            Solver::Sparse(chol) => chol.lanes().and_then(|lanes| {
                 let of = |bar: usize| &contributions[bar_start[bar]..bar_start[bar + 1]];
-                let position = |slot| chol.lane_position(slot).expect("K is in the lanes");
-                let used = |block| chol.used_lanes(block).expect("K is in the lanes");
-                LaneAssembly::new(n_bars, of, position, used)
-            }
-            _ => None,
+                let position = |slot| lanes.position(slot);
+                LaneAssembly::new(n_bars, of, position, |block| lanes.used_lanes(block))
+            }),
+            Solver::Dense(_) => None,
         };
         Self {
             n,
