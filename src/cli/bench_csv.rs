@@ -17,8 +17,9 @@
 //!   outputs, and neither evaluates for positions and velocities, read from the state);
 //! - a row of the node positions alone (a scene with `outputs = ["positions"]`), which
 //!   needs no refresh;
-//! - what a row costs the stepping thread when, as in `simulate`, it is handed to a writer
-//!   thread (`outputs::RowThread`) that formats and writes it: pairs of blocks of
+//! - what a row costs the stepping thread when, as in `simulate`, it is evaluated at
+//!   (refreshed; the next step takes that evaluation as its first stage) and handed to a
+//!   writer thread (`outputs::RowThread`) that formats and writes it: pairs of blocks of
 //!   [`BLOCK`] steps, one without rows and one with a row handed over after every step (or
 //!   every 10th), interleaved; the median over the pairs of the difference per row (which
 //!   includes what the rows do to the steps' caches), and of the time inside `send_row`;
@@ -116,7 +117,7 @@ pub fn run(seconds: f64, repeats: usize) -> Result<(), String> {
         ),
         (handed("every step", every_step), every_step.per_row),
         (
-            "time inside `RowThread::send_row` itself (timed around each call; median)".into(),
+            "time inside the refresh and `RowThread::send_row` (timed around both; median)".into(),
             every_step.inside,
         ),
         (
@@ -125,7 +126,7 @@ pub fn run(seconds: f64, repeats: usize) -> Result<(), String> {
         ),
         (handed("every 10th step", every_10th), every_10th.per_row),
         (
-            "time inside `RowThread::send_row` itself (timed around each call; median)".into(),
+            "time inside the refresh and `RowThread::send_row` (timed around both; median)".into(),
             every_10th.inside,
         ),
         (
@@ -213,6 +214,8 @@ type BenchThread = RowThread<BufWriter<Sink>>;
 struct Rows<'a> {
     sink: RowSink<'a>,
     every: u64,
+    /// Evaluate at the row's state first, as `simulate` does for such outputs.
+    refresh: bool,
 }
 
 enum RowSink<'a> {
@@ -238,7 +241,8 @@ impl RowSink<'_> {
     }
 }
 
-/// `n` steps, with `rows`: the seconds spent on them (inside `send_row`), and their number.
+/// `n` steps, with `rows`: the seconds spent on them (in the refresh and `send_row`), and
+/// their number.
 fn steps(sim: &mut Simulation, n: u64, mut rows: Option<&mut Rows>) -> Result<(f64, u64), String> {
     let mut inside = 0.0;
     let mut handed = 0;
@@ -246,6 +250,9 @@ fn steps(sim: &mut Simulation, n: u64, mut rows: Option<&mut Rows>) -> Result<(f
         sim.advance(1, STEP).map_err(|e| e.to_string())?;
         if let Some(rows) = rows.as_deref_mut().filter(|r| i % r.every == 0) {
             let started = Instant::now();
+            if rows.refresh {
+                sim.refresh();
+            }
             rows.sink.take(sim)?;
             inside += started.elapsed().as_secs_f64();
             handed += 1;
@@ -353,15 +360,24 @@ fn measure(
     let mut read_only = [Pairs::default(), Pairs::default()];
     let mut handed_in_all = 0;
     let budget = seconds / repeats as f64;
+    let refresh = outputs::needs_evaluation(table);
     for _ in 0..repeats {
         let us = timed(budget, 100, |n| steps(sim, n, None).map(drop))?;
         best[0] = best[0].min(us);
         for (i, every) in SPACINGS.into_iter().enumerate() {
             let sink = RowSink::Thread(&mut thread);
-            let rows = Rows { sink, every };
+            let rows = Rows {
+                sink,
+                every,
+                refresh,
+            };
             handed_in_all += time_pairs(sim, rows, budget, &mut pairs[i])?;
             let sink = RowSink::ReadOnly(&reader, &mut values);
-            let rows = Rows { sink, every };
+            let rows = Rows {
+                sink,
+                every,
+                refresh,
+            };
             time_pairs(sim, rows, budget, &mut read_only[i])?;
         }
         let us = timed(budget, 100, |n| {

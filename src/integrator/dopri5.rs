@@ -75,8 +75,8 @@ impl Dopri5 {
 impl Integrator for Dopri5 {
     fn attempt(&mut self, rhs: &mut dyn Rhs, t: f64, y: &mut [f64], h: f64) -> Outcome {
         if !self.fresh_k1 {
-            rhs.eval(t, y, &mut self.k[0]);
-            self.evaluations += 1;
+            let evaluated = rhs.eval_start(t, y, &mut self.k[0]);
+            self.evaluations += u64::from(evaluated);
         }
         for s in 1..7 {
             for (i, (stage, yi)) in self.stage.iter_mut().zip(y.iter()).enumerate() {

@@ -19,6 +19,13 @@ use serde::{Deserialize, Serialize};
 pub trait Rhs {
     /// Writes `f(t, y)` into `dy`.
     fn eval(&mut self, t: f64, y: &[f64], dy: &mut [f64]);
+    /// Writes `f(t, y)` at the start of a step (`y` the state the step starts from) into
+    /// `dy`: an evaluation, unless the caller evaluated there already (for its outputs).
+    /// Returns whether it evaluated.
+    fn eval_start(&mut self, t: f64, y: &[f64], dy: &mut [f64]) -> bool {
+        self.eval(t, y, dy);
+        true
+    }
     /// Projects the positions of `y` onto the constraints along the constraint directions
     /// of `before` (the start of the step), adding the displacement to `moved`; a no-op
     /// when the correction is off.

@@ -37,8 +37,8 @@ impl Integrator for Rattle {
     fn attempt(&mut self, rhs: &mut dyn Rhs, t: f64, y: &mut [f64], h: f64) -> Outcome {
         let half = y.len() / 2;
         if !self.fresh {
-            rhs.eval(t, y, &mut self.f);
-            self.evaluations += 1;
+            let evaluated = rhs.eval_start(t, y, &mut self.f);
+            self.evaluations += u64::from(evaluated);
         }
         self.stage.copy_from_slice(y);
         // Kick: v½ = v + h/2 a.

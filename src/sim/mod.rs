@@ -63,7 +63,12 @@ pub struct Simulation {
     h_next: f64,
     stats: Stats,
     ws: Workspace,
+    /// The accelerations of the last [`Simulation::refresh`].
     acc: Vec<f64>,
+    /// The time `acc` was evaluated at while the state has not moved since, and the inputs
+    /// then: a step from there takes `acc` as its first stage instead of evaluating again.
+    evaluated: Option<f64>,
+    evaluated_inputs: Inputs,
     integrator: Box<dyn Integrator>,
     /// Apply the paper's correction after each step.
     pub correction: bool,
@@ -89,6 +94,8 @@ impl Clone for Simulation {
             stats: self.stats,
             ws: self.ws.clone(),
             acc: self.acc.clone(),
+            evaluated: self.evaluated,
+            evaluated_inputs: self.evaluated_inputs.clone(),
             integrator: self.integrator.boxed_clone(),
             correction: self.correction,
             guard_stability: self.guard_stability,
@@ -106,6 +113,8 @@ struct System<'a> {
     inputs: &'a Inputs,
     ws: &'a mut Workspace,
     correction: bool,
+    /// The accelerations at the start of the step, when the simulation has them.
+    start: Option<&'a [f64]>,
 }
 
 impl Rhs for System<'_> {
@@ -115,6 +124,18 @@ impl Rhs for System<'_> {
         let (dq, dv) = dy.split_at_mut(half);
         self.ws.copy_in_halves(dq, v);
         dynamics::accelerations(self.model, self.inputs, t, q, v, self.ws, dv);
+    }
+
+    fn eval_start(&mut self, t: f64, y: &[f64], dy: &mut [f64]) -> bool {
+        let Some(acc) = self.start.take() else {
+            self.eval(t, y, dy);
+            return true;
+        };
+        let half = y.len() / 2;
+        let (dq, dv) = dy.split_at_mut(half);
+        self.ws.copy_in_halves(dq, &y[half..]);
+        self.ws.copy_in_halves(dv, acc);
+        false
     }
 
     fn for_each_half(&self, out: &mut [f64], f: &(dyn Fn(usize, &mut [f64]) + Sync)) {
@@ -153,6 +174,8 @@ impl Simulation {
         let mut sim = Self {
             inputs: Inputs::start(&model),
             stepped_inputs: Inputs::start(&model),
+            evaluated: None,
+            evaluated_inputs: Inputs::start(&model),
             correction: model.solver.correction,
             guard_stability: true,
             locate_events: model.solver.locate_events,
@@ -294,6 +317,8 @@ impl Simulation {
             &mut self.ws,
             &mut self.acc,
         );
+        self.evaluated = Some(t);
+        self.evaluated_inputs.copy_from(&self.inputs);
     }
 
     /// The workspace of the last evaluation (node positions, γ, λ, …).

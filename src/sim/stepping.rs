@@ -219,11 +219,14 @@ impl Simulation {
 
     /// One attempt from `t` with step `h`, then the correction and the finiteness check.
     fn attempt(&mut self, t: f64, h: f64) -> Result<Outcome, StepError> {
+        // The state moves: what the last refresh evaluated serves this step's start only.
+        let fresh = self.evaluated.take() == Some(t) && self.evaluated_inputs == self.inputs;
         let mut system = System {
             model: &self.model,
             inputs: &self.inputs,
             ws: &mut self.ws,
             correction: self.correction,
+            start: fresh.then_some(&self.acc[..]),
         };
         let outcome = self
             .integrator
