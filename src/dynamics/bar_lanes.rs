@@ -180,15 +180,16 @@ fn four_first(
     // Negated by its sign bit, as `-x` is (`0 − x` would make −0 of 0).
     let minus_bdot2 = _mm256_xor_pd(norm_squared(bdot), _mm256_set1_pd(-0.0));
     let inv_den = _mm256_mul_pd(inv_l2, load(&inertia.inv_beta_minus_alpha));
-    let (bx, by, bz, m, d) = (
+    let (bx, by, bz, m, d, i) = (
         lanes(b.x),
         lanes(b.y),
         lanes(b.z),
         lanes(minus_bdot2),
         lanes(inv_den),
+        lanes(inv_l2),
     );
     for (l, kept) in kept.iter_mut().enumerate() {
-        *kept = (Vector3::new(bx[l], by[l], bz[l]), m[l], d[l]);
+        *kept = (Vector3::new(bx[l], by[l], bz[l]), m[l], d[l], i[l]);
     }
     respond(inertia, (b, minus_bdot2, inv_den), f, (acc, lambda));
     lanes(inv_l2)
@@ -399,7 +400,7 @@ mod tests {
                 let mut added = [Vec::new(), Vec::new()];
                 let mut outputs = [0, 1].map(|_| {
                     let acc = vectors(n, &mut next);
-                    (acc, vec![7.0; n], vec![(Vector3::zeros(), 0.0, 1.0); n])
+                    (acc, vec![7.0; n], vec![(Vector3::zeros(), 0.0, 1.0, 1.0); n])
                 });
                 let [(acc, lambda, kept), (acc_ref, lambda_ref, kept_ref)] = &mut outputs;
                 let [add, add_ref] = &mut added;
@@ -454,8 +455,8 @@ mod tests {
         }
         for (i, (a, b)) in kept.iter().zip(kept_ref).enumerate() {
             let (a, b) = (
-                (bits(&a.0), a.1.to_bits(), a.2.to_bits()),
-                (bits(&b.0), b.1.to_bits(), b.2.to_bits()),
+                (bits(&a.0), a.1.to_bits(), a.2.to_bits(), a.3.to_bits()),
+                (bits(&b.0), b.1.to_bits(), b.2.to_bits(), b.3.to_bits()),
             );
             assert_eq!(a, b, "{name}: bar {i}'s kept values");
         }

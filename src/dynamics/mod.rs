@@ -52,9 +52,9 @@ impl Inputs {
     }
 }
 
-/// What λ needs of a bar besides its end forces: `(b, −|ḃ|², 1/((β − α)|b|²))`, kept from
-/// the first λ pass for the second.
-type BarKept = (Vector3<f64>, f64, f64);
+/// What λ needs of a bar besides its end forces, `(b, −|ḃ|², 1/((β − α)|b|²))`, kept from
+/// the first λ pass for the second, and `1/|b|²` for K's assembly after it.
+type BarKept = (Vector3<f64>, f64, f64, f64);
 
 /// A workspace's split between two threads and its second thread; a copy of the workspace
 /// gets a thread of its own (two simulations must not share one).
@@ -160,7 +160,7 @@ impl Workspace {
                 Vector3::zeros();
                 model.ground.as_ref().map_or(0, |g| g.nodes.len())
             ],
-            bars: vec![(Vector3::zeros(), 0.0, 1.0); model.bars.len()],
+            bars: vec![(Vector3::zeros(), 0.0, 1.0, 1.0); model.bars.len()],
             reactions: model.reactions.clone(),
             dense_fallbacks: 0,
             halves: Halves::new(model, min_bars)
@@ -448,9 +448,10 @@ fn first_response(
             bv,
             -bdot.norm_squared(),
             inv_l2 * inertia.inv_beta_minus_alpha,
+            inv_l2,
         );
         add_bar(first + i, &bv, inv_l2);
-        (*lambda, *acc) = response(inertia, *kept, f);
+        (*lambda, *acc) = response(inertia, kept, f);
     }
 }
 
@@ -493,7 +494,7 @@ fn second_response(
     let inputs = bars.iter().zip(end_force);
     for (((&fixed, inertia), (cached, f)), (acc, lambda)) in per_bar.zip(inputs).zip(out) {
         if !fixed {
-            (*lambda, *acc) = response(inertia, *cached, f);
+            (*lambda, *acc) = response(inertia, cached, f);
         }
     }
 }
@@ -504,7 +505,7 @@ fn second_response(
 #[inline(always)]
 fn response(
     inertia: &crate::model::inertia::BarInertia,
-    (bv, minus_bdot2, inv_den): BarKept,
+    &(bv, minus_bdot2, inv_den, _): &BarKept,
     [fa, fb]: &[Vector3<f64>; 2],
 ) -> (f64, [Vector3<f64>; 2]) {
     let lambda = (minus_bdot2 - bv.dot(&(fa * inertia.alpha + fb * inertia.beta))) * inv_den;
@@ -532,7 +533,7 @@ fn pairs_mut(ends: &mut [Vector3<f64>]) -> &mut [[Vector3<f64>; 2]] {
 /// no blocks either: `add_bar` returns.
 #[inline(always)]
 fn assemble_kept(r: &mut Reactions, bars: &[BarKept]) {
-    r.assemble_bars(|i| bars[i].0);
+    r.assemble_bars(|i| (bars[i].0, bars[i].3));
 }
 
 /// Stage 4: reactions Ω from `N̈ P = 0` (K assembled by [`bar_response`]), added to the end

@@ -148,15 +148,15 @@ impl LaneAssembly {
     pub(super) fn assemble(
         &self,
         lanes_k: &mut LaneGroups,
-        b: impl Fn(usize) -> Vector3<f64>,
+        b: impl Fn(usize) -> (Vector3<f64>, f64),
         mut add_bar: impl FnMut(&mut LaneGroups, usize, &Vector3<f64>, f64),
         avx2: bool,
     ) {
         for unit in &self.units {
             match unit {
                 Unit::Bar(bar) => {
-                    let bv = b(*bar);
-                    add_bar(lanes_k, *bar, &bv, 1.0 / bv.norm_squared());
+                    let (bv, inv_l2) = b(*bar);
+                    add_bar(lanes_k, *bar, &bv, inv_l2);
                 }
                 Unit::Bundle {
                     bar_of_lane,
@@ -167,15 +167,15 @@ impl LaneAssembly {
                     let _ = avx2;
                     #[cfg(target_arch = "x86_64")]
                     if avx2 {
-                        // A lane without a bar adds ±0 (b = x̂: |b|² = 1, no 0 · ∞).
-                        let v = |l: usize| bar_of_lane[l].map_or(Vector3::x(), &b);
+                        // A lane without a bar adds ±0 (b = x̂, 1/|b|² = 1: no 0 · ∞).
+                        let v = |l: usize| bar_of_lane[l].map_or((Vector3::x(), 1.0), &b);
                         // SAFETY: the processor has AVX2.
                         unsafe { add_bundle(lanes_k, contributions, [v(0), v(1), v(2), v(3)]) };
                         continue;
                     }
                     for &bar in bar_of_lane.iter().flatten() {
-                        let bv = b(bar);
-                        add_bar(lanes_k, bar, &bv, 1.0 / bv.norm_squared());
+                        let (bv, inv_l2) = b(bar);
+                        add_bar(lanes_k, bar, &bv, inv_l2);
                     }
                 }
             }
@@ -192,10 +192,10 @@ fn sign(set: bool) -> f64 {
     }
 }
 
-/// A bundle's contributions for its bars' vectors `v` (one per lane), each lane's sums as
-/// [`super::Reactions::add_bar`]'s: `1/|b|²` with `|b|²` as nalgebra's `norm_squared` sums
-/// it, `outer_lower`'s products, `Contribution::block`, and the sums of `summed` (old plus
-/// new, or new where first), stored whole.
+/// A bundle's contributions for its bars' vectors and their `1/|b|²`, `v` (one per lane),
+/// each lane's sums as [`super::Reactions::add_bar`]'s: `outer_lower`'s products,
+/// `Contribution::block`, and the sums of `summed` (old plus new, or new where first),
+/// stored whole.
 ///
 /// # Safety
 /// The processor has AVX2.
@@ -204,21 +204,17 @@ fn sign(set: bool) -> f64 {
 unsafe fn add_bundle(
     lanes_k: &mut LaneGroups,
     contributions: &[LaneContribution],
-    v: [Vector3<f64>; LANES],
+    v: [(Vector3<f64>, f64); LANES],
 ) {
     use std::arch::x86_64::{
-        _mm256_add_pd, _mm256_blendv_pd, _mm256_div_pd, _mm256_loadu_pd, _mm256_mul_pd,
-        _mm256_set1_pd, _mm256_set_pd, _mm256_storeu_pd, _mm256_xor_pd,
+        _mm256_add_pd, _mm256_blendv_pd, _mm256_loadu_pd, _mm256_mul_pd, _mm256_set1_pd,
+        _mm256_set_pd, _mm256_storeu_pd, _mm256_xor_pd,
     };
     let load = |a: &Lanes| unsafe { _mm256_loadu_pd(a.as_ptr()) };
-    let x = _mm256_set_pd(v[3].x, v[2].x, v[1].x, v[0].x);
-    let y = _mm256_set_pd(v[3].y, v[2].y, v[1].y, v[0].y);
-    let z = _mm256_set_pd(v[3].z, v[2].z, v[1].z, v[0].z);
-    let l2 = _mm256_add_pd(
-        _mm256_add_pd(_mm256_mul_pd(x, x), _mm256_mul_pd(y, y)),
-        _mm256_mul_pd(z, z),
-    );
-    let inv_l2 = _mm256_div_pd(_mm256_set1_pd(1.0), l2);
+    let x = _mm256_set_pd(v[3].0.x, v[2].0.x, v[1].0.x, v[0].0.x);
+    let y = _mm256_set_pd(v[3].0.y, v[2].0.y, v[1].0.y, v[0].0.y);
+    let z = _mm256_set_pd(v[3].0.z, v[2].0.z, v[1].0.z, v[0].0.z);
+    let inv_l2 = _mm256_set_pd(v[3].1, v[2].1, v[1].1, v[0].1);
     let bb = [
         _mm256_mul_pd(x, x),
         _mm256_mul_pd(y, x),

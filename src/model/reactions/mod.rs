@@ -251,11 +251,11 @@ impl Reactions {
         }
     }
 
-    /// Assembles K for the bar vectors `b(bar)`, as [`Self::add_bar`] of every bar in order
-    /// with `1/|b|²` would (the same bits), several bars at a time where they make bundles
-    /// in the side-by-side chains.
+    /// Assembles K for the bar vectors and their `1/|b|²`, `b(bar)`, as [`Self::add_bar`] of
+    /// every bar in order would (the same bits), several bars at a time where they make
+    /// bundles in the side-by-side chains.
     #[inline(always)]
-    pub fn assemble_bars(&mut self, b: impl Fn(usize) -> Vector3<f64>) {
+    pub fn assemble_bars(&mut self, b: impl Fn(usize) -> (Vector3<f64>, f64)) {
         #[cfg(target_arch = "x86_64")]
         let avx2 = std::arch::is_x86_feature_detected!("avx2");
         #[cfg(not(target_arch = "x86_64"))]
@@ -265,7 +265,7 @@ impl Reactions {
 
     /// [`Self::assemble_bars`], the bundles in AVX2 if `avx2` (the processor has it).
     #[inline(always)]
-    fn assemble_bars_with(&mut self, b: impl Fn(usize) -> Vector3<f64>, avx2: bool) {
+    fn assemble_bars_with(&mut self, b: impl Fn(usize) -> (Vector3<f64>, f64), avx2: bool) {
         self.clear();
         let bars = self.bar_start.len() - 1;
         let Self {
@@ -290,8 +290,8 @@ impl Reactions {
             return;
         }
         for bar in 0..bars {
-            let bv = b(bar);
-            self.add_bar(bar, &bv, 1.0 / bv.norm_squared());
+            let (bv, inv_l2) = b(bar);
+            self.add_bar(bar, &bv, inv_l2);
         }
     }
 
