@@ -18,12 +18,15 @@ const H: f64 = 1e-3;
 const STEPS: usize = 500;
 const FORCE: f64 = 5.0;
 
-/// What the FMU reported for node 7 and the bar-length residual.
-#[derive(Debug, Clone, Copy)]
+/// What the FMU reported for node 7 and the bar-length residual, and every node position
+/// after 1 ms doSteps with and without a cable tension read after each.
+#[derive(Debug, Clone)]
 struct FmuRun {
     x_start: f64,
     x_end: f64,
     length_error: f64,
+    positions_reading_tensions: Vec<f64>,
+    positions_not_reading: Vec<f64>,
 }
 
 fn vr(import: &Fmi2Import, name: &str) -> u32 {
@@ -78,13 +81,44 @@ fn run_fmu(fmu: &Path) -> FmuRun {
         x_start,
         x_end: out[0],
         length_error: out[1],
+        positions_reading_tensions: positions_after_steps(&import, true),
+        positions_not_reading: positions_after_steps(&import, false),
     }
+}
+
+/// Every node position after `STEPS` doSteps of `H` under the load, with `cable[1].tension`
+/// (an output that needs an evaluation) read after each step if `read_tension`.
+fn positions_after_steps(import: &Fmi2Import, read_tension: bool) -> Vec<f64> {
+    let nodes: Vec<u32> = (1..=9)
+        .flat_map(|n| ["x", "y", "z"].map(|axis| vr(import, &format!("node[{n}].{axis}"))))
+        .collect();
+    let (fx, tension) = (vr(import, "node[7].fx"), vr(import, "cable[1].tension"));
+    let mut inst = import
+        .instantiate_cs("reads", false, false)
+        .expect("fmi2Instantiate");
+    Common::setup_experiment(&mut inst, None, 0.0, None).expect("fmi2SetupExperiment");
+    Common::enter_initialization_mode(&mut inst).expect("fmi2EnterInitializationMode");
+    Common::exit_initialization_mode(&mut inst).expect("fmi2ExitInitializationMode");
+    inst.set_real(&[fx], &[FORCE]).expect("fmi2SetReal");
+    let mut t = [0.0];
+    for k in 0..STEPS {
+        inst.do_step(k as f64 * H, H, true).expect("fmi2DoStep");
+        if read_tension {
+            inst.get_real(&[tension], &mut t)
+                .expect("fmi2GetReal tension");
+            assert!(t[0] > 0.0, "cable 1 is taut: {}", t[0]);
+        }
+    }
+    let mut positions = vec![0.0; nodes.len()];
+    inst.get_real(&nodes, &mut positions).expect("fmi2GetReal");
+    Common::terminate(&mut inst).expect("fmi2Terminate");
+    positions
 }
 
 /// Builds and runs the FMU once for all tests in this file.
 fn fmu_run() -> FmuRun {
     static RUN: OnceLock<FmuRun> = OnceLock::new();
-    *RUN.get_or_init(|| {
+    RUN.get_or_init(|| {
         let dir = std::env::temp_dir().join(format!(
             "tensegrity-fmi-import-{}-{}",
             std::process::id(),
@@ -97,6 +131,7 @@ fn fmu_run() -> FmuRun {
         let _ = std::fs::remove_dir_all(&dir);
         run
     })
+    .clone()
 }
 
 #[test]
@@ -140,4 +175,18 @@ fn fmu_matches_the_library() {
     assert_eq!(run.x_start, x_start, "same start geometry");
     assert!(diff <= 1e-12, "FMU and library differ by {diff:e} m");
     assert!((run.length_error - sim.length_error()).abs() <= 1e-12);
+}
+
+#[test]
+fn outputs_read_between_steps_change_no_bit() {
+    // The read evaluates at the step's end, and the next step takes that evaluation as its
+    // first stage: the motion must be the same bits as without the reads.
+    let run = fmu_run();
+    let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+    assert_eq!(
+        bits(&run.positions_reading_tensions),
+        bits(&run.positions_not_reading)
+    );
+    let moved = (run.positions_not_reading[18] - run.x_start).abs();
+    assert!(moved > 1e-3, "node 7 moved {moved} m");
 }

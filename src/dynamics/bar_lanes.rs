@@ -400,7 +400,11 @@ mod tests {
                 let mut added = [Vec::new(), Vec::new()];
                 let mut outputs = [0, 1].map(|_| {
                     let acc = vectors(n, &mut next);
-                    (acc, vec![7.0; n], vec![(Vector3::zeros(), 0.0, 1.0, 1.0); n])
+                    (
+                        acc,
+                        vec![7.0; n],
+                        vec![(Vector3::zeros(), 0.0, 1.0, 1.0); n],
+                    )
                 });
                 let [(acc, lambda, kept), (acc_ref, lambda_ref, kept_ref)] = &mut outputs;
                 let [add, add_ref] = &mut added;
