@@ -533,7 +533,7 @@ fn pairs_mut(ends: &mut [Vector3<f64>]) -> &mut [[Vector3<f64>; 2]] {
 /// no blocks either: `add_bar` returns.
 #[inline(always)]
 fn assemble_kept(r: &mut Reactions, bars: &[BarKept]) {
-    r.assemble_bars(|i| (bars[i].0, bars[i].3));
+    r.assemble_bars(|i| (&bars[i].0, &bars[i].3));
 }
 
 /// Stage 4: reactions Ω from `N̈ P = 0` (K assembled by [`bar_response`]), added to the end

@@ -145,10 +145,10 @@ impl LaneAssembly {
     /// bundle's in all its lanes at once with `avx2` (the processor has it), else bar by
     /// bar too.
     #[inline(always)]
-    pub(super) fn assemble(
+    pub(super) fn assemble<'a>(
         &self,
         lanes_k: &mut LaneGroups,
-        b: impl Fn(usize) -> (Vector3<f64>, f64),
+        b: impl Fn(usize) -> (&'a Vector3<f64>, &'a f64),
         mut add_bar: impl FnMut(&mut LaneGroups, usize, &Vector3<f64>, f64),
         avx2: bool,
     ) {
@@ -156,7 +156,7 @@ impl LaneAssembly {
             match unit {
                 Unit::Bar(bar) => {
                     let (bv, inv_l2) = b(*bar);
-                    add_bar(lanes_k, *bar, &bv, inv_l2);
+                    add_bar(lanes_k, *bar, bv, *inv_l2);
                 }
                 Unit::Bundle {
                     bar_of_lane,
@@ -168,20 +168,25 @@ impl LaneAssembly {
                     #[cfg(target_arch = "x86_64")]
                     if avx2 {
                         // A lane without a bar adds ±0 (b = x̂, 1/|b|² = 1: no 0 · ∞).
-                        let v = |l: usize| bar_of_lane[l].map_or((Vector3::x(), 1.0), &b);
+                        let v = |l: usize| bar_of_lane[l].map_or((&NO_BAR.0, &NO_BAR.1), &b);
                         // SAFETY: the processor has AVX2.
                         unsafe { add_bundle(lanes_k, contributions, [v(0), v(1), v(2), v(3)]) };
                         continue;
                     }
                     for &bar in bar_of_lane.iter().flatten() {
                         let (bv, inv_l2) = b(bar);
-                        add_bar(lanes_k, bar, &bv, inv_l2);
+                        add_bar(lanes_k, bar, bv, *inv_l2);
                     }
                 }
             }
         }
     }
 }
+
+/// What a lane without a bar takes: `b = x̂` and its `1/|b|²` (read from memory, as a bar's
+/// are: built on the stack, its parts were stored piecewise and loaded whole, and each load
+/// waited for the stores to retire).
+static NO_BAR: (Vector3<f64>, f64) = (Vector3::new(1.0, 0.0, 0.0), 1.0);
 
 /// −1 (sign bit set) for `true`, 0 for `false`.
 fn sign(set: bool) -> f64 {
@@ -204,7 +209,7 @@ fn sign(set: bool) -> f64 {
 unsafe fn add_bundle(
     lanes_k: &mut LaneGroups,
     contributions: &[LaneContribution],
-    v: [(Vector3<f64>, f64); LANES],
+    v: [(&Vector3<f64>, &f64); LANES],
 ) {
     use std::arch::x86_64::{
         _mm256_add_pd, _mm256_blendv_pd, _mm256_loadu_pd, _mm256_mul_pd, _mm256_set1_pd,
@@ -214,7 +219,7 @@ unsafe fn add_bundle(
     let x = _mm256_set_pd(v[3].0.x, v[2].0.x, v[1].0.x, v[0].0.x);
     let y = _mm256_set_pd(v[3].0.y, v[2].0.y, v[1].0.y, v[0].0.y);
     let z = _mm256_set_pd(v[3].0.z, v[2].0.z, v[1].0.z, v[0].0.z);
-    let inv_l2 = _mm256_set_pd(v[3].1, v[2].1, v[1].1, v[0].1);
+    let inv_l2 = _mm256_set_pd(*v[3].1, *v[2].1, *v[1].1, *v[0].1);
     let bb = [
         _mm256_mul_pd(x, x),
         _mm256_mul_pd(y, x),

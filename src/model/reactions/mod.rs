@@ -255,7 +255,7 @@ impl Reactions {
     /// every bar in order would (the same bits), several bars at a time where they make
     /// bundles in the side-by-side chains.
     #[inline(always)]
-    pub fn assemble_bars(&mut self, b: impl Fn(usize) -> (Vector3<f64>, f64)) {
+    pub fn assemble_bars<'a>(&mut self, b: impl Fn(usize) -> (&'a Vector3<f64>, &'a f64)) {
         #[cfg(target_arch = "x86_64")]
         let avx2 = std::arch::is_x86_feature_detected!("avx2");
         #[cfg(not(target_arch = "x86_64"))]
@@ -265,7 +265,11 @@ impl Reactions {
 
     /// [`Self::assemble_bars`], the bundles in AVX2 if `avx2` (the processor has it).
     #[inline(always)]
-    fn assemble_bars_with(&mut self, b: impl Fn(usize) -> (Vector3<f64>, f64), avx2: bool) {
+    fn assemble_bars_with<'a>(
+        &mut self,
+        b: impl Fn(usize) -> (&'a Vector3<f64>, &'a f64),
+        avx2: bool,
+    ) {
         self.clear();
         let bars = self.bar_start.len() - 1;
         let Self {
@@ -291,7 +295,7 @@ impl Reactions {
         }
         for bar in 0..bars {
             let (bv, inv_l2) = b(bar);
-            self.add_bar(bar, &bv, inv_l2);
+            self.add_bar(bar, bv, *inv_l2);
         }
     }
 

@@ -137,7 +137,10 @@ fn bundled_assembly_gives_the_bits_of_bar_by_bar() {
             )
         };
         let avx2 = avx2 && std::arch::is_x86_feature_detected!("avx2");
-        bundled.assemble_bars_with(|bar| (b(bar), 1.0 / b(bar).norm_squared()), avx2);
+        let kept: Vec<_> = (0..model.bars.len())
+            .map(|bar| (b(bar), 1.0 / b(bar).norm_squared()))
+            .collect();
+        bundled.assemble_bars_with(|bar| (&kept[bar].0, &kept[bar].1), avx2);
         bar_by_bar.clear();
         for bar in 0..model.bars.len() {
             let bv = b(bar);
