@@ -59,8 +59,8 @@ fn rk4_after_a_refresh_takes_it_as_its_first_stage() {
     let with = run(&mut refreshed, steps, true);
     let without = run(&mut plain, steps, false);
     assert_eq!(bits(&with), bits(&without));
-    // Three evaluations a step after a refresh, four otherwise; `Simulation::new` refreshes
-    // once, so the plain run's first step takes three too.
+    // Three evaluations a step after a refresh, four otherwise; the plain run's first step
+    // takes three too (`Simulation::new` and the stability check before it refresh).
     assert_eq!(evaluations(&refreshed), 3 * steps);
     assert_eq!(evaluations(&plain), 4 * steps - 1);
     // The motion is not trivial: the load and the prestress moved the nodes.
@@ -87,6 +87,30 @@ fn dopri5_and_rattle_take_it_where_they_would_evaluate_at_the_start() {
             _ => assert_eq!(a, b, "{method:?}"),
         }
     }
+}
+
+#[test]
+fn rattle_takes_it_when_new_inputs_drop_its_carried_acceleration() {
+    // New inputs make RATTLE evaluate at the step's start again (its carried acceleration
+    // belongs to the old ones); a refresh with the new inputs stands in for it.
+    let run = |refresh: bool| {
+        let mut sim = sim(Method::Rattle);
+        sim.advance(3, STEP).unwrap();
+        sim.inputs.force_density[0] *= 1.5;
+        if refresh {
+            sim.refresh();
+        }
+        let before = evaluations(&sim);
+        sim.advance(1, STEP).unwrap();
+        (evaluations(&sim) - before, sim.state().y.clone())
+    };
+    let ((refreshed, with), (plain, without)) = (run(true), run(false));
+    assert_eq!(
+        (refreshed, plain),
+        (1, 2),
+        "the start's and the end's, or the end's"
+    );
+    assert_eq!(bits(&[with]), bits(&[without]));
 }
 
 #[test]

@@ -248,3 +248,34 @@ fn energy_column_names_what_it_leaves_out() {
         r.markdown
     );
 }
+
+#[test]
+fn sampling_between_steps_does_not_count_as_the_methods_work() {
+    // The report refreshes at each output to sample; a step right after a refresh could
+    // take it as its first stage, which would hide a quarter of rk4's work at a step as
+    // long as the output interval. Every step must evaluate its start itself.
+    let r = short_report(&builtin("prism2").unwrap(), "sampling");
+    let mut checked = 0;
+    for run in r
+        .runs
+        .iter()
+        .filter(|x| x.method == Method::Rk4 && x.correction)
+    {
+        let m = run.result.as_ref().expect("rk4 runs");
+        let steps = (r.horizon / run.setting).round() as u64;
+        println!(
+            "rk4 h = {}: {} evaluations, {steps} steps",
+            run.setting, m.rhs_evaluations
+        );
+        // The first step may take the evaluation that ends the stability check, which
+        // runs inside the timed advance (its power iteration is not counted either).
+        assert!(
+            m.rhs_evaluations + 1 >= 4 * steps,
+            "h = {}: {} evaluations for {steps} steps",
+            run.setting,
+            m.rhs_evaluations
+        );
+        checked += 1;
+    }
+    assert!(checked >= 2, "{checked} rk4 runs");
+}

@@ -22,8 +22,9 @@
 //!   writer thread (`outputs::RowThread`) that formats and writes it: pairs of blocks of
 //!   [`BLOCK`] steps, one without rows and one with a row handed over after every step (or
 //!   every 10th), interleaved; the median over the pairs of the difference per row (which
-//!   includes what the rows do to the steps' caches), and of the time inside `send_row`;
-//!   and the same with the rows only read into a buffer, no writer thread: the floor of
+//!   includes what the rows do to the steps' caches), and of the time inside the refresh
+//!   and `send_row`; and the same with the rows refreshed and only read into a buffer, no
+//!   writer thread: the floor of
 //!   any scheme that copies the values out, so that what the hand-over adds shows;
 //! - the writer thread's own CPU time per row: the process's CPU time less the stepping
 //!   thread's, over all rows handed over (the formatting moved to the other core, it did
@@ -77,7 +78,7 @@ pub fn run(seconds: f64, repeats: usize) -> Result<(), String> {
     let [read_every_step, read_every_10th] = &c.read_only;
     let read_only = |what: &str, h: &Handover| {
         format!(
-            "the same rows only read into a buffer after {what}, no writer thread (the \
+            "the same rows, refreshed and only read into a buffer after {what}, no writer thread (the \
              floor; median of {} pairs)",
             h.pairs
         )
@@ -176,7 +177,7 @@ struct Costs {
 struct Handover {
     /// A block with rows less the block without, per row.
     per_row: f64,
-    /// Inside `send_row`, per row.
+    /// Inside the refresh and `send_row`, per row.
     inside: f64,
     pairs: usize,
 }

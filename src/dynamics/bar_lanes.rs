@@ -458,6 +458,11 @@ mod tests {
             assert_eq!(a.to_bits(), b.to_bits(), "{name}: bar {i}'s λ");
         }
         for (i, (a, b)) in kept.iter().zip(kept_ref).enumerate() {
+            // What K's assembly reads: a moving bar's 1/|b|² (a static one keeps b = 0).
+            if a.0 != Vector3::zeros() {
+                let inv_l2 = 1.0 / a.0.norm_squared();
+                assert_eq!(a.3.to_bits(), inv_l2.to_bits(), "{name}: bar {i}'s 1/|b|²");
+            }
             let (a, b) = (
                 (bits(&a.0), a.1.to_bits(), a.2.to_bits(), a.3.to_bits()),
                 (bits(&b.0), b.1.to_bits(), b.2.to_bits(), b.3.to_bits()),

@@ -88,8 +88,8 @@ pub struct Workspace {
     pub lambda: Vec<f64>,
     /// Ground contact force per contact point (`Ground::nodes` order), N.
     pub contact_force: Vec<Vector3<f64>>,
-    /// Per bar, what the second λ pass needs (and `b` to assemble K again after a failed
-    /// factor).
+    /// Per bar, what the second λ pass needs, and `b` and `1/|b|²` for K's assembly after
+    /// the first (K's bundles, deferred blocks, again after a failed factor).
     bars: Vec<BarKept>,
     reactions: Reactions,
     /// Evaluations where the sparse reaction factor failed and the dense solve was used.

@@ -321,6 +321,12 @@ impl Simulation {
         self.evaluated_inputs.copy_from(&self.inputs);
     }
 
+    /// Makes the next step evaluate at its start itself instead of taking the last
+    /// refresh's evaluation: for timing a method alone, with samples taken between steps.
+    pub fn forget_refresh(&mut self) {
+        self.evaluated = None;
+    }
+
     /// The workspace of the last evaluation (node positions, γ, λ, …).
     pub fn workspace(&self) -> &Workspace {
         &self.ws

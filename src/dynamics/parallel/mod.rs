@@ -218,10 +218,9 @@ pub(super) fn evaluate(
             scale = amax0.max(amax1);
             if let Some(r) = shared {
                 for &i in &halves.deferred_bars {
-                    let bv = bars[i].0;
+                    let (bv, inv_l2) = (bars[i].0, bars[i].3);
                     // SAFETY: both halves are done; one thread.
-                    let closed =
-                        unsafe { r.add_bar(i, &bv, 1.0 / bv.norm_squared(), |c| !deferred[c]) };
+                    let closed = unsafe { r.add_bar(i, &bv, inv_l2, |c| !deferred[c]) };
                     scale = scale.max(closed);
                 }
             }
