@@ -6,7 +6,7 @@ use std::path::Path;
 use std::sync::OnceLock;
 
 mod fmu_support;
-use fmu_support::build_fmu;
+use fmu_support::{build_fmu, started};
 
 use fmi::fmi2::import::Fmi2Import;
 use fmi::fmi2::instance::{CoSimulation, Common};
@@ -93,12 +93,7 @@ fn positions_after_steps(import: &Fmi2Import, read_tension: bool) -> Vec<f64> {
         .flat_map(|n| ["x", "y", "z"].map(|axis| vr(import, &format!("node[{n}].{axis}"))))
         .collect();
     let (fx, tension) = (vr(import, "node[7].fx"), vr(import, "cable[1].tension"));
-    let mut inst = import
-        .instantiate_cs("reads", false, false)
-        .expect("fmi2Instantiate");
-    Common::setup_experiment(&mut inst, None, 0.0, None).expect("fmi2SetupExperiment");
-    Common::enter_initialization_mode(&mut inst).expect("fmi2EnterInitializationMode");
-    Common::exit_initialization_mode(&mut inst).expect("fmi2ExitInitializationMode");
+    let mut inst = started(import, "reads");
     inst.set_real(&[fx], &[FORCE]).expect("fmi2SetReal");
     let mut t = [0.0];
     for k in 0..STEPS {

@@ -13,10 +13,10 @@
 use std::time::Instant;
 
 mod fmu_support;
-use fmu_support::build_fmu;
+use fmu_support::{build_fmu, started};
 
 use fmi::fmi2::import::Fmi2Import;
-use fmi::fmi2::instance::{CoSimulation, Common, InstanceCS};
+use fmi::fmi2::instance::{CoSimulation, Common};
 use fmi::traits::FmiImport;
 
 const SCENE: &str = "tower20";
@@ -24,20 +24,10 @@ const H: f64 = 1e-3;
 const STEPS: usize = 2_000;
 const REPEATS: usize = 7;
 
-fn started(import: &Fmi2Import) -> InstanceCS {
-    let mut inst = import
-        .instantiate_cs("bench", false, false)
-        .expect("fmi2Instantiate");
-    Common::setup_experiment(&mut inst, None, 0.0, None).expect("fmi2SetupExperiment");
-    Common::enter_initialization_mode(&mut inst).expect("fmi2EnterInitializationMode");
-    Common::exit_initialization_mode(&mut inst).expect("fmi2ExitInitializationMode");
-    inst
-}
-
 /// Seconds for the span: one doStep (`reads` None), or a doStep per 1 ms each followed by
 /// a get of `reads`.
 fn run(import: &Fmi2Import, reads: Option<&[u32]>) -> f64 {
-    let mut inst = started(import);
+    let mut inst = started(import, "bench");
     let mut values = vec![0.0; reads.map_or(0, <[u32]>::len)];
     let start = Instant::now();
     match reads {

@@ -3,6 +3,9 @@
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
+use fmi::fmi2::import::Fmi2Import;
+use fmi::fmi2::instance::{Common, InstanceCS};
+
 /// `target/<profile>`, the directory holding the CLI this test was built with.
 fn profile_dir() -> PathBuf {
     Path::new(env!("CARGO_BIN_EXE_tensegrity-fmu"))
@@ -54,4 +57,16 @@ pub fn build_fmu(dir: &Path, scene: &str) -> PathBuf {
     );
     assert!(fmu.is_file(), "{} was not written", fmu.display());
     fmu
+}
+
+/// A co-simulation instance named `name`, initialized at time 0: instantiated, set up,
+/// and through initialization mode, ready for its first `fmi2DoStep`.
+pub fn started(import: &Fmi2Import, name: &str) -> InstanceCS {
+    let mut inst = import
+        .instantiate_cs(name, false, false)
+        .expect("fmi2Instantiate");
+    Common::setup_experiment(&mut inst, None, 0.0, None).expect("fmi2SetupExperiment");
+    Common::enter_initialization_mode(&mut inst).expect("fmi2EnterInitializationMode");
+    Common::exit_initialization_mode(&mut inst).expect("fmi2ExitInitializationMode");
+    inst
 }
