@@ -170,7 +170,9 @@ impl LaneAssembly {
                         // A lane without a bar adds ±0 (b = x̂, 1/|b|² = 1: no 0 · ∞).
                         let v = |l: usize| bar_of_lane[l].map_or((&NO_BAR.0, &NO_BAR.1), &b);
                         // SAFETY: the processor has AVX2.
-                        unsafe { add_bundle(lanes_k, contributions, [v(0), v(1), v(2), v(3)]) };
+                        unsafe {
+                            assemble_bundle(lanes_k, contributions, [v(0), v(1), v(2), v(3)])
+                        };
                         continue;
                     }
                     for &bar in bar_of_lane.iter().flatten() {
@@ -206,7 +208,7 @@ fn sign(set: bool) -> f64 {
 /// The processor has AVX2.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
-unsafe fn add_bundle(
+unsafe fn assemble_bundle(
     lanes_k: &mut LaneGroups,
     contributions: &[LaneContribution],
     v: [(&Vector3<f64>, &f64); LANES],
