@@ -70,7 +70,7 @@ def shell_blocks(text):
             if m:
                 lang, current, start = m.group(1), [], number + 1
         elif stripped.startswith("```"):
-            if lang in ("sh", "bash", "shell", "console"):
+            if lang in ("sh", "bash", "shell"):
                 blocks.append((start, current))
             current = None
         else:
