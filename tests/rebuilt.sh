@@ -18,7 +18,9 @@ awk '
   /     dirty: / && unit != "" {
     reason = $0
     sub(/.*     dirty: /, "", reason)
-    if (reason !~ /^UnitDependencyInfoChanged/ && !seen[unit reason]++) {
+    if (match(reason, /stale: "[^"]*"/))  # a changed file: name it, not its timestamps
+      reason = "changed " substr(reason, RSTART + 7, RLENGTH - 7)
+    if (reason !~ /^(UnitDependencyInfoChanged|FsStatusOutdated\(StaleDep)/ && !seen[unit reason]++) {
       if (!n++) print "!! cargo rebuilt what it had built before:"
       print "!!   " unit ": " substr(reason, 1, 400)
     }

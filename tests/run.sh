@@ -13,8 +13,14 @@ trap 'rm -f "$fingerprints"' EXIT
 # unit that was rebuilt although built before, with the reason cargo gives.
 cargo_step() {
   echo "== $*"
-  { CARGO_LOG=cargo::core::compiler::fingerprint=info "$@" 2>&1; } | tee "$fingerprints" \
-    | { grep -v ' INFO ' || true; }
+  { RUST_BACKTRACE=0 CARGO_LOG=cargo::core::compiler::fingerprint=info "$@" 2>&1; } \
+    | tee "$fingerprints" | awk '
+        / INFO / { hide = 1; next }   # the fingerprint log and the tails of its messages
+        hide && cause { cause = 0; next }
+        hide && $0 == "" { next }
+        hide && $0 == "Caused by:" { cause = 1; next }
+        hide && /^ +[0-9]+: / { next }
+        { hide = 0; print; fflush() }'
   bash tests/rebuilt.sh "$fingerprints"
 }
 
