@@ -20,7 +20,9 @@ awk '
     sub(/.*     dirty: /, "", reason)
     if (match(reason, /stale: "[^"]*"/))  # a changed file: name it, not its timestamps
       reason = "changed " substr(reason, RSTART + 7, RLENGTH - 7)
-    if (reason !~ /^(UnitDependencyInfoChanged|FsStatusOutdated\(StaleDep)/ && !seen[unit reason]++) {
+    if (reason ~ /StaleDependency/)  # rebuilt or rerun by an earlier cargo command
+      reason = "a dependency (or its build script'"'"'s output) is newer: an earlier command rebuilt it"
+    if (reason !~ /^(UnitDependencyInfoChanged|FsStatusOutdated\(StaleDepFingerprint)/ && !seen[unit reason]++) {
       if (!n++) print "!! cargo rebuilt what it had built before:"
       print "!!   " unit ": " substr(reason, 1, 400)
     }
