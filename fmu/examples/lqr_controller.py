@@ -1,8 +1,10 @@
-"""LQR state feedback on all force densities of prism2, stepped through fmpy's FMU2Slave API.
+"""LQR state feedback on every force density of an FMU, stepped through fmpy's FMU2Slave API.
 
-Scene prism2 (the default FMU): 15 force-density controlled cables, nodes 1-3 pinned, force
-inputs on nodes 7-9. The controller is designed on the linear model that
-`tensegrity-fmu linearize` writes about the FMU's start state (an equilibrium at rest):
+Works on any FMU that the project builds whose scene has force-density controlled cables
+(`control = "force_density"`, such as the built-in prism2); an FMU without `cable[K].force_density`
+inputs gets a one-line explanation (exit status 2). The controller is designed on the linear
+model that `tensegrity-fmu linearize` writes about the FMU's start state (an equilibrium at
+rest), from the scene packaged in the FMU (resources/scene.toml), so model and FMU match:
 
     x' = A x + B u,  y = C x + D u,
 
@@ -11,50 +13,39 @@ the FMU's variable names. The gain K minimizes the integral of
 
     |node displacements|² / (1 cm)² + |node velocities|² / (10 cm/s)² + |Δγ|² / (2 N/m)²
 
-over the 15 force densities γ (the displacements and velocities of the free nodes 4-9 through
-the rows of C; scipy.linalg.solve_continuous_are). At every communication step the modal state
-is estimated from the measured node positions and velocities (least squares through the same
-rows of C) and the command is γ = γ₀ − K x̂, clamped to [0.1 γ₀, 3 γ₀] so every cable stays
-taut. A force pulse on node[7].fx (10 N for 50 ms at t = 0.5 s) disturbs the structure.
+over the force densities γ (the displacements and velocities of the free nodes, those without
+pin reactions, through the rows of C; scipy.linalg.solve_continuous_are). At every
+communication step the modal state is estimated from the measured node positions and
+velocities (least squares through the same rows of C) and the command is γ = γ₀ − K x̂,
+clamped to [0.1 γ₀, 3 γ₀] so every cable stays taut. A force pulse on the first loaded node
+(10 N along x for 50 ms at t = 0.5 s) disturbs the structure; `--law none` holds every input
+for comparison.
 
-The 12 cables that can move a free node span only 10 of the 12 modal force directions about
-this equilibrium, so two directions are reached only through the stiffness coupling: the
-slowest closed-loop mode decays at about 0.34 1/s (time constant 3 s) whatever the weights.
-Over 20 s node 7 still returns to within a few hundredths of a millimetre of its start.
+On prism2 the 12 cables that can move a free node span only 10 of the 12 modal force
+directions about its equilibrium, so two directions are reached only through the stiffness
+coupling: the slowest closed-loop mode decays at about 0.34 1/s (time constant 3 s) whatever
+the weights. Over 20 s node 7 still returns to within a few hundredths of a millimetre of its
+start; held inputs leave it swinging by centimetres.
 
-The old PD law on cable 14 alone (controller.py) is run with the same disturbance by `--law pd`:
-it drifts away, while the LQR brings node 7 back to its start.
-
-    .venv/bin/python fmu/examples/lqr_controller.py [prism2.fmu] [--model model.json]
-        [--stop 20] [--step 0.001] [--pulse 20] [--law lqr|pd|none]
-
-Without a .fmu the script builds prism2 with the CLI (target/release/tensegrity-fmu, or
-`tensegrity-fmu` on the PATH, or --cli); without --model it linearizes the scene packaged in
-the FMU (resources/scene.toml), so model and FMU always match.
+    .venv/bin/python fmu/examples/lqr_controller.py prism2.fmu [--model model.json]
+        [--stop 20] [--step 0.001] [--pulse 10] [--law lqr|none] [--cli PATH]
 """
 
-import argparse
 import json
 import shutil
 import subprocess
 import sys
 import tempfile
+import zipfile
 from pathlib import Path
 
 import numpy as np
-import scipy.linalg
-from fmpy import extract, read_model_description
+from fmpy import extract
 from fmpy.fmi2 import FMU2Slave
 
-HERE = Path(__file__).resolve().parent
-sys.path.insert(0, str(HERE))
-import controller as pd_example  # noqa: E402  (the old PD law, for the comparison)
+from fmu_variables import FmuVariables, Parser, check_fmu, fail
 
-REPO = HERE.parents[1]
-WATCHED = 7  # the node whose excursion is reported
-FREE_NODES = range(4, 10)  # nodes 4-9 (1-3 are pinned)
-POSITIONS = [f"node[{n}].{a}" for n in FREE_NODES for a in "xyz"]
-VELOCITIES = [f"node[{n}].v{a}" for n in FREE_NODES for a in "xyz"]
+REPO = Path(__file__).resolve().parents[2]
 
 # LQR weights: the scale of each quantity that costs as much as the others.
 DISPLACEMENT_SCALE = 0.01  # m
@@ -67,23 +58,25 @@ DENSITY_BOUNDS = (0.1, 3.0)
 def find_cli(cli=None):
     """The tensegrity-fmu executable: the given one, the repository's release build, or PATH."""
     if cli:
+        if not Path(cli).is_file():
+            fail(f"--cli {cli}: no such file")
         return str(cli)
     built = REPO / "target" / "release" / "tensegrity-fmu"
     if built.is_file():
         return str(built)
     found = shutil.which("tensegrity-fmu")
     if not found:
-        sys.exit("tensegrity-fmu not found: build it (cargo build --release) or pass --cli")
+        fail("tensegrity-fmu not found: build it (cargo build --release) or pass --cli PATH")
     return found
 
 
 def linearize(scene, cli, out):
     """Runs `tensegrity-fmu linearize SCENE -o out` and returns the model as a dict."""
-    subprocess.run(
-        [cli, "linearize", str(scene), "-o", str(out)],
-        check=True,
-        stdout=subprocess.DEVNULL,
-    )
+    res = subprocess.run([cli, "linearize", str(scene), "-o", str(out)],
+                         stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+    if res.returncode != 0:
+        lines = res.stderr.strip().splitlines() or ["no message"]
+        fail(f"tensegrity-fmu linearize failed: {lines[-1]}")
     return json.loads(Path(out).read_text())
 
 
@@ -110,16 +103,20 @@ class LinearModel:
 
 
 class LqrLaw:
-    """u = clamp(γ₀ − K x̂), x̂ from the node positions and velocities by least squares."""
+    """u = clamp(γ₀ − K x̂), x̂ from the free nodes' positions and velocities by least squares."""
 
-    def __init__(self, lin: LinearModel):
+    def __init__(self, lin: LinearModel, free_nodes):
+        import scipy.linalg  # only the design needs scipy
+
         m = lin.m
+        self.positions = [n for node in free_nodes for n in FmuVariables.position(node)]
+        velocities = [n for node in free_nodes for n in FmuVariables.velocity(node)]
         self.commanded = [n for n in lin.inputs if n.endswith(".force_density")]
-        self.measured = POSITIONS + VELOCITIES
+        self.measured = self.positions + velocities
         self.u0 = np.array([lin.u0[n] for n in self.commanded])
-        self.y0 = np.array([lin.y0[n] for n in POSITIONS])
-        cp = lin.output_rows(POSITIONS)
-        cv = lin.output_rows(VELOCITIES)
+        self.y0 = np.array([lin.y0[n] for n in self.positions])
+        cp = lin.output_rows(self.positions)
+        cv = lin.output_rows(velocities)
         # Positions depend on the amplitudes only, velocities on the rates only.
         assert np.allclose(cp[:, m:], 0) and np.allclose(cv[:, :m], 0)
         self.position_pinv = np.linalg.pinv(cp[:, :m])
@@ -134,7 +131,7 @@ class LqrLaw:
         self.upper = DENSITY_BOUNDS[1] * self.u0
 
     def estimate(self, measured):
-        n = len(POSITIONS)
+        n = len(self.positions)
         amplitudes = self.position_pinv @ (measured[:n] - self.y0)
         rates = self.velocity_pinv @ measured[n:]
         return np.concatenate([amplitudes, rates])
@@ -142,20 +139,6 @@ class LqrLaw:
     def __call__(self, _t, measured):
         u = self.u0 - self.K @ self.estimate(measured)
         return np.clip(u, self.lower, self.upper)
-
-
-class PdLaw:
-    """The PD law of controller.py on cable 14 alone (the other 14 densities held)."""
-
-    def __init__(self, start):
-        self.commanded = [pd_example.CABLE]
-        self.measured = [f"node[{WATCHED}].x", f"node[{WATCHED}].vx"]
-        self.q0 = start[pd_example.CABLE]
-        self.u0 = np.array([self.q0])
-
-    def __call__(self, _t, measured):
-        x, vx = measured
-        return np.array([pd_example.pd_command(self.q0, x, vx)])
 
 
 class OpenLoop:
@@ -169,110 +152,141 @@ class OpenLoop:
         return np.array([])
 
 
+def watched_node(fmu: FmuVariables):
+    """The node that the pulse pushes and whose excursion is reported: the first loaded node,
+    else the highest free one."""
+    if fmu.force_input_nodes:
+        return fmu.force_input_nodes[0]
+    return max(fmu.free, key=lambda n: fmu.start.get(f"node[{n}].z", 0.0))
+
+
 def run(fmu_path, law, stop=20.0, step=1e-3, pulse=10.0, pulse_start=0.5, pulse_width=0.05,
         report_every=1.0, out=sys.stdout):
     """Steps the FMU to `stop` with `law` at communication step `step`, a force of `pulse` N
-    on node[7].fx from `pulse_start` for `pulse_width` s. Returns times, node 7's positions,
-    and the smallest force density commanded."""
-    md = read_model_description(str(fmu_path))
-    vr = {v.name: v.valueReference for v in md.modelVariables}
+    along x on the watched node from `pulse_start` for `pulse_width` s (when the FMU has force
+    inputs). Returns times, the watched node's positions, and the smallest force density
+    commanded."""
+    fmu = FmuVariables(check_fmu(fmu_path))
+    md, vr = fmu.md, fmu.vr
+    node_id = watched_node(fmu)
     unzipdir = extract(str(fmu_path))
-    fmu = FMU2Slave(
+    slave = FMU2Slave(
         guid=md.guid,
         unzipDirectory=unzipdir,
         modelIdentifier=md.coSimulation.modelIdentifier,
         instanceName="lqr",
     )
-    watch = [vr[f"node[{WATCHED}].{a}"] for a in "xyz"]
+    watch = [vr[n] for n in fmu.position(node_id)]
     measured_vr = [vr[n] for n in law.measured]
     commanded_vr = [vr[n] for n in law.commanded]
-    force_vr = [vr[f"node[{WATCHED}].fx"]]
+    force_vr = [vr[f"node[{node_id}].fx"]] if node_id in fmu.force_input_nodes else []
     n_steps = round(stop / step)
     every = max(1, round(report_every / step))
     times = np.arange(n_steps + 1) * step
     node = np.empty((n_steps + 1, 3))
     lowest = np.inf
     try:
-        fmu.instantiate()
-        fmu.setupExperiment(startTime=0.0, stopTime=stop)
-        fmu.enterInitializationMode()
-        fmu.exitInitializationMode()
+        slave.instantiate()
+        slave.setupExperiment(startTime=0.0, stopTime=stop)
+        slave.enterInitializationMode()
+        slave.exitInitializationMode()
         if out:
-            print(f"{'t [s]':>6} {'node[7].x [m]':>14} {'node[7].y [m]':>14} "
-                  f"{'node[7].z [m]':>14} {'|Δ| [mm]':>10} {'max |Δγ| [N/m]':>15}", file=out)
+            label = f"node[{node_id}]"
+            print(f"{'t [s]':>6} {label + '.x [m]':>14} {label + '.y [m]':>14} "
+                  f"{label + '.z [m]':>14} {'|Δ| [mm]':>10} {'max |Δγ| [N/m]':>15}", file=out)
         for k, t in enumerate(times):
-            node[k] = fmu.getReal(watch)
-            u = law(t, np.array(fmu.getReal(measured_vr)) if measured_vr else None)
+            node[k] = slave.getReal(watch)
+            u = law(t, np.array(slave.getReal(measured_vr)) if measured_vr else None)
             if len(u):
                 lowest = min(lowest, float(u.min()))
             if out and k % every == 0:
                 d = 1e3 * np.linalg.norm(node[k] - node[0])
-                low = f"{abs(u - law.u0).max():15.3f}" if len(u) else f"{'-':>15}"
+                change = f"{abs(u - law.u0).max():15.3f}" if len(u) else f"{'-':>15}"
                 print(f"{t:6.2f} {node[k][0]:14.6f} {node[k][1]:14.6f} {node[k][2]:14.6f} "
-                      f"{d:10.3f} {low}", file=out)
+                      f"{d:10.3f} {change}", file=out)
             if k == n_steps:
                 break
             if len(u):
-                fmu.setReal(commanded_vr, list(u))
-            force = pulse if pulse_start <= t + 1e-9 < pulse_start + pulse_width else 0.0
-            fmu.setReal(force_vr, [force])
-            fmu.doStep(currentCommunicationPoint=t, communicationStepSize=step)
-        fmu.terminate()
+                slave.setReal(commanded_vr, list(u))
+            if force_vr:
+                force = pulse if pulse_start <= t + 1e-9 < pulse_start + pulse_width else 0.0
+                slave.setReal(force_vr, [force])
+            slave.doStep(currentCommunicationPoint=t, communicationStepSize=step)
+        slave.terminate()
     finally:
-        fmu.freeInstance()
+        slave.freeInstance()
         shutil.rmtree(unzipdir, ignore_errors=True)
     return times, node, lowest
 
 
 def excursion(times, node, after=0.0):
-    """Node 7's largest distance from its start position (after time `after`) and its final
-    distance, in m."""
+    """The watched node's largest distance from its start position (after time `after`) and
+    its final distance, in m."""
     d = np.linalg.norm(node - node[0], axis=1)
     return float(d[times >= after].max()), float(d[-1])
 
 
+def design(fmu_path, fmu, model=None, cli=None):
+    """The LQR law on the FMU's force densities, designed on `model` (a linearize JSON) or on
+    the linearization of the scene packaged in the FMU."""
+    try:
+        import scipy.linalg  # noqa: F401  (the Riccati solver; not in the quickstart's .venv)
+    except ImportError:
+        fail("the LQR design needs scipy: .venv/bin/pip install -r tests/requirements.txt "
+             "(or bash tests/setup.sh)")
+    if model:
+        try:
+            data = json.loads(Path(model).read_text())
+        except (OSError, ValueError) as exc:
+            fail(f"--model {model}: not a linear model from `tensegrity-fmu linearize` ({exc})")
+    else:
+        with tempfile.TemporaryDirectory() as tmp, zipfile.ZipFile(fmu_path) as archive:
+            if "resources/scene.toml" not in archive.namelist():
+                fail(f"{fmu_path} has no resources/scene.toml: pass --model from "
+                     "`tensegrity-fmu linearize SCENE -o model.json`")
+            scene = Path(tmp, "scene.toml")
+            scene.write_bytes(archive.read("resources/scene.toml"))
+            data = linearize(scene, find_cli(cli), Path(tmp, "model.json"))
+    lin = LinearModel(data)
+    missing = [n for n in fmu.force_density_inputs if n not in lin.inputs]
+    if missing:
+        fail(f"--model: {missing[0]} is an input of the FMU but not of the linear model; "
+             "linearize the FMU's own scene")
+    return lin, LqrLaw(lin, fmu.free)
+
+
 def main(argv=None):
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("fmu", nargs="?", help="prism2.fmu (built with the CLI if omitted)")
+    ap = Parser(description=__doc__.splitlines()[0])
+    ap.add_argument("fmu", help="an FMU built by tensegrity-fmu with force-density cables")
     ap.add_argument("--model", help="a linear model from `tensegrity-fmu linearize` (.json)")
     ap.add_argument("--cli", help="the tensegrity-fmu executable")
     ap.add_argument("--stop", type=float, default=20.0, help="stop time, s (default 20)")
     ap.add_argument("--step", type=float, default=1e-3, help="communication step, s")
     ap.add_argument("--pulse", type=float, default=10.0,
-                    help="force on node[7].fx for 50 ms from t = 0.5 s, N (default 10)")
-    ap.add_argument("--law", choices=["lqr", "pd", "none"], default="lqr")
+                    help="force along x on the first loaded node for 50 ms from t = 0.5 s, N")
+    ap.add_argument("--law", choices=["lqr", "none"], default="lqr")
     args = ap.parse_args(argv)
-    with tempfile.TemporaryDirectory() as tmp:
-        tmp = Path(tmp)
-        fmu_path = args.fmu
-        if fmu_path is None:
-            fmu_path = tmp / "prism2.fmu"
-            subprocess.run([find_cli(args.cli), "build", "prism2", "-o", str(fmu_path)],
-                           check=True, stdout=subprocess.DEVNULL)
-        md = read_model_description(str(fmu_path))
-        start = {v.name: float(v.start) for v in md.modelVariables if v.causality == "input"}
-        if args.law == "lqr":
-            if args.model:
-                data = json.loads(Path(args.model).read_text())
-            else:
-                scene = extract(str(fmu_path), unzipdir=str(tmp / "fmu"))
-                data = linearize(Path(scene, "resources", "scene.toml"), find_cli(args.cli),
-                                 tmp / "model.json")
-            lin = LinearModel(data)
-            law = LqrLaw(lin)
-            slowest = -law.closed_loop.real.max()
-            print(f"LQR on {len(law.commanded)} force densities, {lin.m} modes; slowest "
-                  f"closed-loop decay rate {slowest:.3f} 1/s; |K| max {abs(law.K).max():.1f}")
-        elif args.law == "pd":
-            law = PdLaw(start)
-            print(f"PD law of controller.py on {pd_example.CABLE}")
-        else:
-            law = OpenLoop()
-            print("open loop: every input held")
-        times, node, lowest = run(fmu_path, law, args.stop, args.step, args.pulse)
+    for option in ("stop", "step"):
+        value = getattr(args, option)
+        if not (np.isfinite(value) and value > 0):
+            fail(f"--{option} {value:g}: must be a positive number of seconds")
+    fmu = FmuVariables(check_fmu(args.fmu))
+    if not fmu.force_density_inputs:
+        fail(f"{args.fmu} has no force-density inputs (cable[K].force_density), the LQR's "
+             "actuators: build a scene whose cables have control = \"force_density\", e.g. prism2")
+    if args.law == "lqr":
+        lin, law = design(args.fmu, fmu, args.model, args.cli)
+        slowest = -law.closed_loop.real.max()
+        print(f"LQR on {len(law.commanded)} force densities, {lin.m} modes; slowest "
+              f"closed-loop decay rate {slowest:.3f} 1/s; |K| max {abs(law.K).max():.1f}")
+    else:
+        law = OpenLoop()
+        print("open loop: every input held")
+    times, node, lowest = run(args.fmu, law, args.stop, args.step, args.pulse)
     peak, final = excursion(times, node)
-    print(f"node 7: largest excursion {1e3 * peak:.3f} mm, final offset {1e3 * final:.3f} mm "
-          f"(after {args.stop:g} s, step {args.step:g} s, {args.pulse:g} N pulse)")
+    print(f"node {watched_node(fmu)}: largest excursion {1e3 * peak:.3f} mm, final offset "
+          f"{1e3 * final:.3f} mm (after {args.stop:g} s, step {args.step:g} s, "
+          f"{args.pulse:g} N pulse)")
     if np.isfinite(lowest):
         print(f"smallest force density commanded: {lowest:.3f} N/m")
     return times, node, lowest

@@ -9,7 +9,6 @@ of the FMU, never from recorded outputs of the code under test.
 
 import re
 import subprocess
-import sys
 
 import numpy as np
 import pytest
@@ -19,7 +18,6 @@ from fmpy.validation import validate_fmu
 
 from conftest import REPO, Slave, cable_length, make_callbacks
 
-CONTROLLER = REPO / "fmu" / "examples" / "controller.py"
 GRAVITY = "gravity = [0.0, 0.0, -9.81]"
 
 
@@ -347,22 +345,3 @@ def test_thousand_load_instantiate_free_unload_cycles(fmus):
                           modelIdentifier=fmu.md.coSimulation.modelIdentifier, instanceName=f"i{i}")
         slave.instantiate()
         slave.freeInstance()
-
-
-# ---------------------------------------------------------------- the controller example
-
-def test_controller_example_runs(fmus):
-    fmu = fmus.builtin("prism2")
-    res = subprocess.run([sys.executable, str(CONTROLLER), str(fmu.path)],
-                         capture_output=True, text=True, timeout=60)
-    assert res.returncode == 0, res.stderr
-    lines = res.stdout.strip().splitlines()
-    assert "node[7].x" in lines[0] and "node[7].z" in lines[0]
-    rows = np.array([[float(v) for v in line.split()] for line in lines[1:]])
-    assert rows.shape == (21, 4)
-    assert np.allclose(rows[:, 0], np.arange(21) * 0.1)
-    start = fmu.scene["nodes"][6]
-    assert rows[0, 1] == pytest.approx(start[0], abs=1e-6)  # node 7 starts where the scene puts it
-    assert rows[0, 2] == pytest.approx(start[2], abs=1e-6)
-    assert np.all(np.isfinite(rows)) and np.all(rows[:, 3] >= 0.0)
-    assert np.ptp(rows[:, 1]) > 1e-3 and np.ptp(rows[:, 3]) > 0.1  # the controller acts
