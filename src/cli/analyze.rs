@@ -8,7 +8,7 @@ use serde_json::json;
 use tensegrity_fmu::analysis::modes::{ModeKind, Spectrum};
 use tensegrity_fmu::analysis::{self, damped, export, linear, Tangent};
 use tensegrity_fmu::fmi::variables::VariableTable;
-use tensegrity_fmu::{outputs, partial, Scene, Simulation};
+use tensegrity_fmu::{numbers, outputs, partial, Scene, Simulation};
 
 /// The scene's start state as a simulation, refused unless it is an equilibrium at rest.
 fn at_rest(scene: &Scene, what: &str) -> Result<Simulation, String> {
@@ -101,16 +101,14 @@ fn shapes_csv(sim: &Simulation, spectrum: &Spectrum) -> String {
         }
     }
     out.push('\n');
+    let mut digits = zmij::Buffer::new();
     for (k, mode) in spectrum.modes.iter().enumerate() {
-        let _ = write!(
-            out,
-            "{},{},{}",
-            k + 1,
-            mode.frequency_hz(),
-            mode.kind.name()
-        );
+        let f = numbers::number(&mut digits, mode.frequency_hz());
+        let _ = write!(out, "{},{f},{}", k + 1, mode.kind.name());
         for d in &mode.shape {
-            let _ = write!(out, ",{},{},{}", d.x, d.y, d.z);
+            for x in [d.x, d.y, d.z] {
+                let _ = write!(out, ",{}", numbers::number(&mut digits, x));
+            }
         }
         out.push('\n');
     }
