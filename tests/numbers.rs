@@ -153,7 +153,11 @@ fn scene_dumps_read_back_exactly() {
             assert_plain(&plain, *x);
         }
         let n = assert_all_plain(&scene.name, &ours);
-        println!("{}: {} floats, {n} numbers, all plain", scene.name, floats.len());
+        println!(
+            "{}: {} floats, {n} numbers, all plain",
+            scene.name,
+            floats.len()
+        );
     }
     // The CLI prints the same text.
     let (ok, out, err) = cli_support::run(&["scene", "prism2"]);
