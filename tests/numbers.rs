@@ -222,3 +222,23 @@ fn csv_files_are_plain() {
     println!("simulate: {n} numbers, modes --shapes: {m}, all plain");
     assert!(n > 1000 && m > 100);
 }
+
+/// `report accuracy`'s `accuracy.csv` (a short sweep): every figure plain.
+#[test]
+fn accuracy_csv_is_plain() {
+    use tensegrity_fmu::report::{self, Options};
+    let dir = cli_support::temp("accuracy-report");
+    let options = Options {
+        horizon: 0.2,
+        fixed_steps: 2,
+        dopri5_tols: vec![1e-6],
+        min_repeats: 1,
+        min_timing_s: 0.0,
+        ..Options::default()
+    };
+    let r = report::accuracy(&builtin("prism2").unwrap(), &options, &dir).expect("report");
+    let text = std::fs::read_to_string(&r.csv).unwrap();
+    let n = assert_all_plain("accuracy.csv", text.split_once('\n').unwrap().1);
+    println!("accuracy.csv: {n} numbers, all plain\n{text}");
+    assert!(n >= 7 * r.runs.len());
+}
