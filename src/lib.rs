@@ -14,6 +14,7 @@ pub mod error;
 pub mod fmi;
 pub mod integrator;
 pub mod model;
+pub mod numbers;
 pub mod outputs;
 pub mod partial;
 pub mod render;

@@ -498,27 +498,4 @@ fn push_row(line: &mut Vec<u8>, values: impl IntoIterator<Item = f64>) {
     line.push(b'\n');
 }
 
-/// Writes a number as people write it: the shortest decimal that reads back as the same
-/// `f64` (`0`, `0.5773502691896258`, `-12.5`, `1e-7`, `1.5e+20`), `NaN`, `inf` or `-inf`.
-pub fn write_number(w: &mut impl Write, x: f64) -> std::io::Result<()> {
-    w.write_all(number(&mut zmij::Buffer::new(), x).as_bytes())
-}
-
-/// The text of [`write_number`], formatted in `digits`.
-pub fn number(digits: &mut zmij::Buffer, x: f64) -> &str {
-    if x == 0.0 {
-        return if x.is_sign_negative() { "-0" } else { "0" };
-    }
-    if !x.is_finite() {
-        return if x.is_nan() {
-            "NaN"
-        } else if x > 0.0 {
-            "inf"
-        } else {
-            "-inf"
-        };
-    }
-    // zmij prints integers as `12.0`, large and small magnitudes as `1.5e+20`, `1e-7`.
-    let s = digits.format_finite(x);
-    s.strip_suffix(".0").unwrap_or(s)
-}
+pub use crate::numbers::{number, write_number};

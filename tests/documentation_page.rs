@@ -13,7 +13,11 @@ use tensegrity_fmu::sim::Simulation;
 
 fn page(scene: &Scene) -> String {
     let sim = Simulation::new(Model::new(scene).unwrap());
-    index_html(&sim, &VariableTable::new(&sim))
+    index_html(
+        &sim,
+        &VariableTable::new(&sim),
+        &format!("{}.fmu", scene.name),
+    )
 }
 
 /// The cells of the table row of variable `name`.
@@ -134,7 +138,11 @@ fn counts_have_the_right_plural() {
 /// as `tensegrity-fmu build` writes it.
 fn built_page(scene: &Scene) -> String {
     let sim = Simulation::new(analysis::load(scene).unwrap());
-    index_html(&sim, &VariableTable::new(&sim))
+    index_html(
+        &sim,
+        &VariableTable::new(&sim),
+        &format!("{}.fmu", scene.name),
+    )
 }
 
 /// The rows (mode, frequency, kind) of the natural-frequency table.
@@ -213,4 +221,36 @@ fn a_start_state_not_at_rest_gets_a_sentence_instead_of_frequencies() {
     let rows = frequency_rows(&built_page(&scene));
     assert_eq!(rows.len(), LISTED_MODES);
     assert!(rows.iter().all(|r| r[2] == "vibration"), "{rows:?}");
+}
+
+/// The usage example opens the file the FMU was written as, whatever its name.
+#[test]
+fn documentation_names_the_file_the_fmu_was_built_as() {
+    use tensegrity_fmu::fmi::package::build_fmu;
+    let dir = std::env::temp_dir().join(format!("tensegrity-doc-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    // build_fmu only checks that the binary carries this build's id.
+    let binary = dir.join("binary.so");
+    std::fs::write(&binary, tensegrity_fmu::fmi::BUILD_ID).unwrap();
+    for (file, literal) in [
+        ("my-prism.fmu", "\"my-prism.fmu\""),
+        ("say \"hi\".fmu", "\"say \\\"hi\\\".fmu\""),
+    ] {
+        let out = dir.join(file);
+        build_fmu(&builtin("prism2").unwrap(), &binary, &out).unwrap();
+        let mut zip = zip::ZipArchive::new(std::fs::File::open(&out).unwrap()).unwrap();
+        let mut html = String::new();
+        std::io::Read::read_to_string(
+            &mut zip.by_name("documentation/index.html").unwrap(),
+            &mut html,
+        )
+        .unwrap();
+        let text = html.replace("&quot;", "\"").replace("&amp;", "&");
+        let call = format!("simulate_fmu({literal}, stop_time=1.0");
+        assert!(text.contains(&call), "{file}: no {call} in the page");
+        assert!(
+            !text.contains("prism2.fmu"),
+            "{file}: the page names prism2.fmu"
+        );
+    }
 }

@@ -66,7 +66,11 @@ fn describe(scene: &Scene) -> Described {
     let xml = golden_model_description(scene).expect("modelDescription.xml");
     let md: Md = quick_xml::de::from_str(&xml).expect("parse modelDescription.xml");
     let sim = Simulation::new(Model::new(scene).expect("valid scene"));
-    let doc = index_html(&sim, &VariableTable::new(&sim));
+    let doc = index_html(
+        &sim,
+        &VariableTable::new(&sim),
+        &format!("{}.fmu", scene.name),
+    );
     Described { md, doc }
 }
 

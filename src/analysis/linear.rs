@@ -11,6 +11,7 @@
 
 use nalgebra::{DMatrix, DVector};
 
+use super::damped::ModalMatrices;
 use super::modes::Spectrum;
 use super::{InputChannel, Tangent};
 use crate::dynamics::Inputs;
@@ -67,24 +68,13 @@ pub fn linearize(
     );
     let m = phi.ncols();
     let kinds: Vec<InputChannel> = channels.iter().map(|(_, c)| *c).collect();
-    let modal_mass = phi.tr_mul(&(&tangent.mass * &phi));
-    let mass_inv = modal_mass
-        .clone()
-        .try_inverse()
-        .expect("modal mass is invertible");
-    let stiffness = phi.tr_mul(&(tangent.tangent_stiffness() * &phi));
-    let damping = -phi.tr_mul(&(&tangent.damping * &phi));
+    let matrices = ModalMatrices::new(&tangent, &phi);
+    let mass_inv = &matrices.mass_inverse;
     let force_input = tangent.input_matrix(model, inputs, &kinds);
-    let mut a = DMatrix::zeros(2 * m, 2 * m);
-    a.view_mut((0, m), (m, m))
-        .copy_from(&DMatrix::identity(m, m));
-    a.view_mut((m, 0), (m, m))
-        .copy_from(&(-&mass_inv * &stiffness));
-    a.view_mut((m, m), (m, m))
-        .copy_from(&(-&mass_inv * &damping));
+    let a = matrices.state_matrix();
     let mut b = DMatrix::zeros(2 * m, kinds.len());
     b.view_mut((m, 0), (m, kinds.len()))
-        .copy_from(&(&mass_inv * phi.tr_mul(&force_input)));
+        .copy_from(&(mass_inv * phi.tr_mul(&force_input)));
     let ctx = Context {
         model,
         inputs,

@@ -1,12 +1,13 @@
 //! Analyses of a structure about a state at rest, built on the tangent of the equations
 //! of motion ([`crate::dynamics::tangent`]): the static equilibrium a scene can start from
-//! ([`equilibrium`]), natural frequencies and mode shapes ([`modes`]) and continuous-time
-//! state-space models ([`linear`]).
+//! ([`equilibrium`]), natural frequencies and mode shapes ([`modes`]), their damping
+//! ([`damped`]) and continuous-time state-space models ([`linear`]).
 //!
 //! The bar lengths stay constraints in η₂, so the analyses work in minimal coordinates ξ
 //! of the constraint tangent space: `δη₂ = Z ξ` with `Z` an orthonormal basis of null(G)
 //! (`../shared/design/analysis.md`).
 
+pub mod damped;
 pub mod equilibrium;
 pub mod export;
 pub mod linear;

@@ -120,7 +120,7 @@ enum Command {
     Modes {
         /// Scene file (.toml or .json) or built-in name; default: prism2.
         scene: Option<String>,
-        /// Print `{"frequencies_hz": [...], "kinds": [...], ...}` instead of a table.
+        /// Print `{"frequencies_hz": [...], "damped_frequencies_hz": [...], "damping_ratios": [...], "kinds": [...], ...}` instead of a table.
         #[arg(long)]
         json: bool,
         /// Write the mode shapes (every node's displacement per mode) to this CSV.

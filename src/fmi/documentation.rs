@@ -19,6 +19,11 @@ fn escape(s: &str) -> String {
         .replace('"', "&quot;")
 }
 
+/// `s` as a Python string literal.
+fn python_string(s: &str) -> String {
+    format!("\"{}\"", s.replace('\\', "\\\\").replace('"', "\\\""))
+}
+
 /// `n` followed by the singular or plural noun, e.g. `1 point mass`, `2 point masses`.
 pub fn count(n: usize, singular: &str, plural: &str) -> String {
     format!("{n} {}", if n == 1 { singular } else { plural })
@@ -75,8 +80,9 @@ fn escape_code(s: &str) -> String {
         .collect()
 }
 
-/// The HTML page shipped in the FMU, for the simulation at its start state.
-pub fn index_html(sim: &Simulation, table: &VariableTable) -> String {
+/// The HTML page shipped in the FMU, for the simulation at its start state; `fmu_file` is
+/// the name the FMU is written as (its usage example opens that file).
+pub fn index_html(sim: &Simulation, table: &VariableTable, fmu_file: &str) -> String {
     let model = sim.model();
     let scene = &model.scene;
     let mut h = String::new();
@@ -87,7 +93,7 @@ pub fn index_html(sim: &Simulation, table: &VariableTable) -> String {
     if let Some(d) = &scene.description {
         h.push_str(&format!("<p>{}</p>\n", escape(d)));
     }
-    usage(&mut h, model);
+    usage(&mut h, model, fmu_file);
     h.push_str("<h2>Structure and effects</h2>\n<ul>");
     for line in effect_lines(model) {
         h.push_str(&format!("<li>{}</li>", escape(&line)));
@@ -173,12 +179,16 @@ fn natural_frequencies(h: &mut String, sim: &Simulation) {
 }
 
 /// How to run the FMU, and what an importer must know about inputs.
-fn usage(h: &mut String, model: &Model) {
-    let file = format!("{}.fmu", escape(&model.scene.name));
+fn usage(h: &mut String, model: &Model, fmu_file: &str) {
+    // Text content: quotes stay as they are, so the code reads as written.
+    let file = python_string(fmu_file)
+        .replace('&', "&amp;")
+        .replace('<', "&lt;")
+        .replace('>', "&gt;");
     let step = default_communication_step(model);
     h.push_str("<h2>Usage</h2>\n<p>With <a href=\"https://github.com/CATIA-Systems/FMPy\">fmpy</a>:</p>\n<pre><code>");
     h.push_str(&format!(
-        "from fmpy import simulate_fmu\nresult = simulate_fmu(\"{file}\", stop_time=1.0, output_interval={step})\nprint(result.dtype.names, result[-1])"
+        "from fmpy import simulate_fmu\nresult = simulate_fmu({file}, stop_time=1.0, output_interval={step})\nprint(result.dtype.names, result[-1])"
     ));
     h.push_str("</code></pre>\n");
     h.push_str(&format!(

@@ -90,7 +90,11 @@ pub fn build_fmu(scene: &Scene, binary: &Path, out: &Path) -> Result<Built, Stri
             binary.display()
         ));
     }
-    let html = index_html(&sim, &table);
+    let file_name = out.file_name().map_or_else(
+        || format!("{}.fmu", sim.model().scene.name),
+        |name| name.to_string_lossy().into_owned(),
+    );
+    let html = index_html(&sim, &table, &file_name);
     // The FMI 2.0 icon and the documentation's viewer: the structure at its start.
     let start = sim.time();
     let at_start = Frames::record(&mut sim, &[start])?;

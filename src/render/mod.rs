@@ -7,6 +7,7 @@ pub mod animation;
 mod csv;
 mod frames;
 pub mod html;
+pub mod labels;
 pub mod mode;
 pub mod picture;
 pub mod view;

@@ -1,6 +1,6 @@
 //! Still pictures (PNG) of a recorded run, drawn with plotters: an orthographic view fitted
-//! to the structure over the whole run, bars as thick dark lines, cables coloured by
-//! tension (slack ones light grey and dashed) with a colour bar, pinned nodes as
+//! to the structure over the whole run, bars as thick dark lines, cables over them coloured
+//! by tension (slack ones light grey and dashed) with a colour bar, pinned nodes as
 //! triangles, point masses as filled circles, the ground plane as a grid, and a title.
 //! [`draw_frame`] is shared with the GIF animation and the FMU icon.
 
@@ -12,6 +12,7 @@ use plotters::element::DashedPathElement;
 use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
 
+use super::labels::{self, LabelKind};
 use super::view::{depth, project, Fit};
 use super::Frames;
 
@@ -208,7 +209,20 @@ pub fn draw_frame<DB: DrawingBackend>(
             }
         }
     }
-    // Cables under bars; within each, far before near.
+    // Bars under cables, so that cables crossing in front of or behind a bar stay
+    // visible (a tower's cables run over its bars); within each, far before near.
+    let mut bars: Vec<usize> = (0..frames.bars.len()).collect();
+    bars.sort_by(|&a, &b| {
+        depth(mid(frames.bars[a]), az, el).total_cmp(&depth(mid(frames.bars[b]), az, el))
+    });
+    for &b in &bars {
+        let [p, q] = frames.bars[b];
+        area.draw(&PathElement::new(
+            vec![px(pos[p]), px(pos[q])],
+            BAR.stroke_width(thick),
+        ))
+        .map_err(&err)?;
+    }
     let mut cables: Vec<usize> = (0..frames.cables.len()).collect();
     cables.sort_by(|&a, &b| {
         depth(mid(frames.cables[a]), az, el).total_cmp(&depth(mid(frames.cables[b]), az, el))
@@ -232,18 +246,6 @@ pub fn draw_frame<DB: DrawingBackend>(
             area.draw(&PathElement::new(ends.to_vec(), c.stroke_width(thin)))
                 .map_err(&err)?;
         }
-    }
-    let mut bars: Vec<usize> = (0..frames.bars.len()).collect();
-    bars.sort_by(|&a, &b| {
-        depth(mid(frames.bars[a]), az, el).total_cmp(&depth(mid(frames.bars[b]), az, el))
-    });
-    for &b in &bars {
-        let [p, q] = frames.bars[b];
-        area.draw(&PathElement::new(
-            vec![px(pos[p]), px(pos[q])],
-            BAR.stroke_width(thick),
-        ))
-        .map_err(&err)?;
     }
     for &i in &frames.pinned {
         let (x, y) = px(pos[i]);
@@ -281,36 +283,24 @@ fn draw_labels<DB: DrawingBackend>(
     style: &Style,
 ) -> Result<(), String> {
     let err = drawing::<DrawingAreaErrorKind<DB::ErrorType>>("the labels");
-    let pos = &frames.positions[k];
-    let px = |p: [f64; 3]| fit.to_pixel(project(p, style.azimuth, style.elevation));
-    let mid = |[a, b]: [usize; 2]| px([0, 1, 2].map(|i| (pos[a][i] + pos[b][i]) / 2.0));
     let centred = Pos::new(HPos::Center, VPos::Center);
-    let node = ("sans-serif", 15).into_font().color(&RGBColor(0, 0, 150));
-    for (i, &p) in pos.iter().enumerate() {
-        let (x, y) = px(p);
-        area.draw(&Text::new(
-            format!("{}", i + 1),
-            (x + 7, y - 16),
-            node.clone(),
+    let background = WHITE.mix(0.75).filled();
+    for (label, rect) in labels::layout(frames, k, fit, style, area.dim_in_pixel())? {
+        let colour = match label.kind {
+            LabelKind::Node => RGBColor(0, 0, 150),
+            LabelKind::Bar => BAR,
+            LabelKind::Cable => RGBColor(90, 90, 90),
+        };
+        let font = ("sans-serif", label.kind.font_size())
+            .into_font()
+            .color(&colour)
+            .pos(centred);
+        area.draw(&Rectangle::new(
+            [(rect.x0, rect.y0), (rect.x1, rect.y1)],
+            background,
         ))
         .map_err(&err)?;
-    }
-    let bar = ("sans-serif", 13).into_font().color(&BAR).pos(centred);
-    let bg = WHITE.mix(0.8).filled();
-    for (b, &nodes) in frames.bars.iter().enumerate() {
-        let (x, y) = mid(nodes);
-        area.draw(&Rectangle::new([(x - 11, y - 8), (x + 11, y + 8)], bg))
-            .map_err(&err)?;
-        area.draw(&Text::new(format!("b{}", b + 1), (x, y), bar.clone()))
-            .map_err(&err)?;
-    }
-    let cable = ("sans-serif", 12)
-        .into_font()
-        .color(&RGBColor(90, 90, 90))
-        .pos(centred);
-    for (j, &nodes) in frames.cables.iter().enumerate() {
-        let (x, y) = mid(nodes);
-        area.draw(&Text::new(format!("c{}", j + 1), (x, y - 9), cable.clone()))
+        area.draw(&Text::new(label.text, rect.centre(), font))
             .map_err(&err)?;
     }
     Ok(())

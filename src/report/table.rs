@@ -4,6 +4,7 @@ use std::fmt::Write;
 
 use super::{Report, RunRecord};
 use crate::integrator::Method;
+use crate::numbers;
 
 /// The columns of `accuracy.csv`, in order.
 pub const COLUMNS: [&str; 10] = [
@@ -28,16 +29,18 @@ pub(crate) fn csv(runs: &[RunRecord]) -> String {
     s.push('\n');
     for r in runs {
         let on = if r.correction { "on" } else { "off" };
-        let _ = write!(s, "{},{:e},{on},", r.method.name(), r.setting);
+        let mut digits = zmij::Buffer::new();
+        let mut n = |x: f64| numbers::number(&mut digits, x).to_string();
+        let _ = write!(s, "{},{},{on},", r.method.name(), n(r.setting));
         let _ = match &r.result {
             Ok(m) => writeln!(
                 s,
-                "ok,{:.6e},{:.6e},{:.6e},{:.6e},{:.6e},{}",
-                m.wall_time_s,
-                m.max_position_error_m,
-                m.max_length_error_m,
-                m.max_orthogonality_error_m2_s,
-                m.energy_drift_rel,
+                "ok,{},{},{},{},{},{}",
+                n(m.wall_time_s),
+                n(m.max_position_error_m),
+                n(m.max_length_error_m),
+                n(m.max_orthogonality_error_m2_s),
+                n(m.energy_drift_rel),
                 m.rhs_evaluations
             ),
             Err(_) => writeln!(s, "failed,,,,,,"),

@@ -390,9 +390,9 @@ impl Scene {
         Self::from_file(path)
     }
 
-    /// TOML text of this scene.
+    /// TOML text of this scene, numbers in their shortest round-trip form.
     pub fn to_toml_string(&self) -> String {
-        toml::to_string(self).expect("a scene always serializes")
+        crate::numbers::plain_toml(&toml::to_string(self).expect("a scene always serializes"))
     }
 
     /// Checks everything that can be checked without building the model.
