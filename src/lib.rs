@@ -16,7 +16,9 @@ pub mod integrator;
 pub mod model;
 pub mod outputs;
 pub mod partial;
+#[cfg(feature = "cli")]
 pub mod render;
+#[cfg(feature = "cli")]
 pub mod report;
 pub mod scene;
 pub mod sim;

@@ -8,6 +8,7 @@
 //! (`../shared/design/analysis.md`).
 
 pub mod equilibrium;
+#[cfg(feature = "cli")]
 pub mod export;
 pub mod linear;
 pub mod modes;
