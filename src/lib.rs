@@ -17,7 +17,9 @@ pub mod model;
 pub mod numbers;
 pub mod outputs;
 pub mod partial;
+#[cfg(feature = "cli")]
 pub mod render;
+#[cfg(feature = "cli")]
 pub mod report;
 pub mod scene;
 pub mod sim;

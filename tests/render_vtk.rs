@@ -1,5 +1,6 @@
-//! The ParaView time series (`render::vtk::write_pvd`) read back with the `vtkio` crate:
-//! one `.vtp` per recorded time, listed in the `.pvd` with its time; points, lines and
+//! The ParaView time series (`render::vtk::write_pvd`) read back here with quick-xml's
+//! deserializer and a base64 decoder (VTK's own reader checks them in
+//! `tests/fmpy/test_vtk_files.py`): one `.vtp` per recorded time, listed in the `.pvd` with its time; points, lines and
 //! every array bit for bit equal to the simulation's values (the arrays are written in
 //! VTK's inline binary format, so no digits are lost). Also writes, for
 //! `tests/fmpy/test_vtk_files.py`, the series into `target/render-test/` together with a
@@ -8,12 +9,13 @@
 use std::fs;
 use std::path::{Path, PathBuf};
 
+use base64::engine::general_purpose::STANDARD as BASE64;
+use base64::Engine;
 use serde::Deserialize;
 use tensegrity_fmu::render::vtk::write_pvd;
 use tensegrity_fmu::render::{Frames, GroundPlane};
 use tensegrity_fmu::scene::builtin;
 use tensegrity_fmu::{Model, Simulation};
-use vtkio::model::{Attribute, DataSet, IOBuffer, Piece, PolyDataPiece, VertexNumbers, Vtk};
 
 /// Where the series are written (kept for the pytest).
 fn out_dir() -> PathBuf {
@@ -107,41 +109,128 @@ fn read_pvd(path: &Path) -> Vec<(f64, PathBuf)> {
         .collect()
 }
 
-/// The single inline piece of a `.vtp`.
-fn read_vtp(path: &Path) -> PolyDataPiece {
-    let vtk = Vtk::import(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
-    let DataSet::PolyData { mut pieces, .. } = vtk.data else {
-        panic!("{}: not PolyData", path.display())
-    };
-    assert_eq!(pieces.len(), 1, "{}", path.display());
-    match pieces.remove(0) {
-        Piece::Inline(p) => *p,
-        _ => panic!("{}: piece not inline", path.display()),
+#[derive(Deserialize)]
+struct Vtp {
+    #[serde(rename = "@type")]
+    kind: String,
+    #[serde(rename = "@byte_order")]
+    byte_order: String,
+    #[serde(rename = "@header_type")]
+    header_type: String,
+    #[serde(rename = "PolyData")]
+    poly_data: PolyData,
+}
+
+#[derive(Deserialize)]
+struct PolyData {
+    #[serde(rename = "Piece")]
+    pieces: Vec<Piece>,
+}
+
+/// One inline piece: its counts and arrays (a missing `Verts`/`Polys`/`Strips` is empty).
+#[derive(Deserialize)]
+struct Piece {
+    #[serde(rename = "@NumberOfPoints")]
+    n_points: usize,
+    #[serde(rename = "@NumberOfLines")]
+    n_lines: usize,
+    #[serde(rename = "@NumberOfVerts")]
+    n_verts: usize,
+    #[serde(rename = "@NumberOfPolys")]
+    n_polys: usize,
+    #[serde(rename = "@NumberOfStrips")]
+    n_strips: usize,
+    #[serde(rename = "PointData")]
+    point: Arrays,
+    #[serde(rename = "CellData")]
+    cell: Arrays,
+    #[serde(rename = "Points")]
+    points: Arrays,
+    #[serde(rename = "Lines")]
+    lines: Arrays,
+}
+
+#[derive(Deserialize)]
+struct Arrays {
+    #[serde(rename = "DataArray", default)]
+    arrays: Vec<DataArray>,
+}
+
+#[derive(Deserialize)]
+struct DataArray {
+    #[serde(rename = "@type")]
+    kind: String,
+    #[serde(rename = "@Name", default)]
+    name: String,
+    #[serde(rename = "@NumberOfComponents")]
+    components: usize,
+    #[serde(rename = "@format")]
+    format: String,
+    #[serde(rename = "$text")]
+    text: String,
+}
+
+impl DataArray {
+    /// The values' bytes: base64 of a UInt64 byte count, then the little-endian values.
+    fn bytes(&self, kind: &str, size: usize) -> Vec<u8> {
+        assert_eq!((self.kind.as_str(), self.format.as_str()), (kind, "binary"));
+        let raw = BASE64.decode(self.text.trim()).unwrap();
+        let (count, data) = raw.split_at(8);
+        let count = u64::from_le_bytes(count.try_into().unwrap()) as usize;
+        assert_eq!(count, data.len(), "{}: header counts the bytes", self.name);
+        assert_eq!(data.len() % size, 0);
+        data.to_vec()
     }
 }
 
-fn array<'a>(attrs: &'a [Attribute], name: &str) -> &'a IOBuffer {
+/// The single inline piece of a `.vtp`.
+fn read_vtp(path: &Path) -> Piece {
+    let text = fs::read_to_string(path).unwrap();
+    let vtp: Vtp =
+        quick_xml::de::from_str(&text).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    assert_eq!(
+        (
+            vtp.kind.as_str(),
+            vtp.byte_order.as_str(),
+            vtp.header_type.as_str()
+        ),
+        ("PolyData", "LittleEndian", "UInt64")
+    );
+    let mut pieces = vtp.poly_data.pieces;
+    assert_eq!(pieces.len(), 1, "{}", path.display());
+    pieces.remove(0)
+}
+
+fn array<'a>(attrs: &'a Arrays, name: &str) -> &'a DataArray {
     attrs
+        .arrays
         .iter()
-        .find_map(|a| match a {
-            Attribute::DataArray(d) if d.name == name => Some(&d.data),
-            _ => None,
-        })
+        .find(|a| a.name == name)
         .unwrap_or_else(|| panic!("no array {name}"))
 }
 
-fn f64s(b: &IOBuffer) -> Vec<f64> {
-    match b {
-        IOBuffer::F64(v) => v.clone(),
-        other => panic!("not Float64: {other:?}"),
-    }
+fn f64s(a: &DataArray) -> Vec<f64> {
+    let bytes = a.bytes("Float64", 8);
+    bytes
+        .chunks_exact(8)
+        .map(|c| f64::from_le_bytes(c.try_into().unwrap()))
+        .collect()
 }
 
-fn i32s(b: &IOBuffer) -> Vec<i32> {
-    match b {
-        IOBuffer::I32(v) => v.clone(),
-        other => panic!("not Int32: {other:?}"),
-    }
+fn i32s(a: &DataArray) -> Vec<i32> {
+    let bytes = a.bytes("Int32", 4);
+    bytes
+        .chunks_exact(4)
+        .map(|c| i32::from_le_bytes(c.try_into().unwrap()))
+        .collect()
+}
+
+fn u64s(a: &DataArray) -> Vec<u64> {
+    let bytes = a.bytes("UInt64", 8);
+    bytes
+        .chunks_exact(8)
+        .map(|c| u64::from_le_bytes(c.try_into().unwrap()))
+        .collect()
 }
 
 fn bits(v: &[f64]) -> Vec<u64> {
@@ -162,18 +251,18 @@ fn check_series(frames: &Frames, pvd: &Path) {
             format!("{name}_{k:04}.vtp")
         );
         let piece = read_vtp(file);
-        assert_eq!(piece.num_points(), n);
-        let points = f64s(&piece.points);
+        assert_eq!(piece.n_points, n);
+        assert_eq!(piece.n_lines, nb + nc);
+        assert_eq!((piece.n_verts, piece.n_polys, piece.n_strips), (0, 0, 0));
+        assert_eq!(piece.points.arrays.len(), 1);
+        let points = &piece.points.arrays[0];
+        assert_eq!(points.components, 3);
+        let points = f64s(points);
         let want: Vec<f64> = frames.positions[k].iter().flatten().copied().collect();
         assert_eq!(bits(&points), bits(&want), "points at t = {t}");
 
-        let Some(VertexNumbers::XML {
-            connectivity,
-            offsets,
-        }) = piece.lines.clone()
-        else {
-            panic!("no lines at t = {t}")
-        };
+        let connectivity = u64s(array(&piece.lines, "connectivity"));
+        let offsets = u64s(array(&piece.lines, "offsets"));
         assert_eq!(offsets.len(), nb + nc, "one line per member");
         let want: Vec<u64> = frames
             .bars
@@ -187,9 +276,8 @@ fn check_series(frames: &Frames, pvd: &Path) {
             offsets,
             (1..=(nb + nc) as u64).map(|m| 2 * m).collect::<Vec<_>>()
         );
-        assert!(piece.polys.is_none() && piece.verts.is_none() && piece.strips.is_none());
 
-        let cell = &piece.data.cell;
+        let cell = &piece.cell;
         let kind = i32s(array(cell, "kind"));
         assert_eq!(kind, [vec![0; nb], vec![1; nc]].concat());
         let number = i32s(array(cell, "number"));
@@ -208,7 +296,8 @@ fn check_series(frames: &Frames, pvd: &Path) {
             "bar tensions (minus the bar force) at t = {t}"
         );
 
-        let point = &piece.data.point;
+        let point = &piece.point;
+        assert_eq!(array(point, "velocity").components, 3);
         let velocity = f64s(array(point, "velocity"));
         let want: Vec<f64> = frames.velocities[k].iter().flatten().copied().collect();
         assert_eq!(bits(&velocity), bits(&want), "velocities at t = {t}");

@@ -39,9 +39,11 @@
 
 #![warn(missing_docs)]
 
+#[cfg(feature = "xml")]
 mod wire;
 
 /// Error returned by [`ModelDescription::to_xml`].
+#[cfg(feature = "xml")]
 pub use quick_xml::SeError;
 
 /// The root `fmiModelDescription` element.
@@ -84,6 +86,7 @@ pub struct ModelDescription {
     pub model_structure: ModelStructure,
 }
 
+#[cfg(feature = "xml")]
 impl ModelDescription {
     /// Writes the pretty-printed XML document, with its `<?xml ...?>` declaration.
     ///

@@ -9,6 +9,7 @@
 
 pub mod damped;
 pub mod equilibrium;
+#[cfg(feature = "cli")]
 pub mod export;
 pub mod linear;
 pub mod modes;

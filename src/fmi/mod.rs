@@ -4,9 +4,12 @@
 
 mod access;
 pub mod dependencies;
+#[cfg(feature = "cli")]
 pub mod description;
+#[cfg(feature = "cli")]
 pub mod documentation;
 pub mod instance;
+#[cfg(feature = "cli")]
 pub mod package;
 mod parameters;
 pub mod snapshot;

@@ -13,9 +13,9 @@
 //! - Point data `velocity` (Float64, 3 components, m/s), `node` (Int32, 1-based node
 //!   number) and `pinned` (Int32, 1 for a pinned node, else 0).
 //!
-//! The arrays are written by the `vtkio` crate in VTK's inline `binary` format
-//! (base64 of the little-endian values, no compression), so every double reads back
-//! bit for bit. Times in the `.pvd` are written as the shortest decimal that reads back
+//! The XML is written with quick-xml's `Writer`; the arrays in VTK's inline `binary`
+//! format (`header_type="UInt64"`: base64 of the byte count followed by the little-endian
+//! values, no compression), so every double reads back bit for bit. Times in the `.pvd` are written as the shortest decimal that reads back
 //! as the same double.
 //!
 //! Nothing is left half-written: the `.vtp` files go into a temporary folder and the
@@ -27,10 +27,10 @@ use std::fs::{self, File};
 use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
 
-use vtkio::model::{
-    Attribute, Attributes, ByteOrder, DataArray, DataSet, ElementType, IOBuffer, PolyDataPiece,
-    Version, VertexNumbers, Vtk,
-};
+use base64::engine::general_purpose::STANDARD as BASE64;
+use base64::Engine;
+use quick_xml::events::{BytesDecl, BytesText, Event};
+use quick_xml::Writer;
 
 use super::Frames;
 
@@ -210,6 +210,89 @@ fn write_all(
         .map_err(|e| format!("{}: {e}", tmp_pvd.display()))
 }
 
+/// A number type of a VTK `DataArray`: its `type` name and its little-endian bytes.
+trait Element: Copy {
+    const VTK_TYPE: &'static str;
+    fn append_le(self, out: &mut Vec<u8>);
+}
+
+impl Element for f64 {
+    const VTK_TYPE: &'static str = "Float64";
+    fn append_le(self, out: &mut Vec<u8>) {
+        out.extend_from_slice(&self.to_le_bytes());
+    }
+}
+
+impl Element for i32 {
+    const VTK_TYPE: &'static str = "Int32";
+    fn append_le(self, out: &mut Vec<u8>) {
+        out.extend_from_slice(&self.to_le_bytes());
+    }
+}
+
+impl Element for u64 {
+    const VTK_TYPE: &'static str = "UInt64";
+    fn append_le(self, out: &mut Vec<u8>) {
+        out.extend_from_slice(&self.to_le_bytes());
+    }
+}
+
+/// Writes `<DataArray>` with `values` inline in VTK's binary format: base64 of the UInt64
+/// byte count followed by the values (the file's `header_type`).
+fn data_array<W: Write, T: Element>(
+    xml: &mut Writer<W>,
+    name: Option<&str>,
+    components: usize,
+    values: &[T],
+) -> std::io::Result<()> {
+    let size = std::mem::size_of_val(values);
+    let mut bytes = Vec::with_capacity(8 + size);
+    bytes.extend_from_slice(&(size as u64).to_le_bytes());
+    for &v in values {
+        v.append_le(&mut bytes);
+    }
+    let components = components.to_string();
+    let mut element = xml
+        .create_element("DataArray")
+        .with_attribute(("type", T::VTK_TYPE));
+    if let Some(name) = name {
+        element = element.with_attribute(("Name", name));
+    }
+    element
+        .with_attributes([
+            ("NumberOfComponents", components.as_str()),
+            ("format", "binary"),
+        ])
+        .write_text_content(BytesText::new(&BASE64.encode(bytes)))?;
+    Ok(())
+}
+
+/// A `VTKFile` of `kind` in `file`, its content written by `body`.
+fn write_vtk_file(
+    file: &Path,
+    kind: &str,
+    version: &str,
+    header_type: Option<&str>,
+    body: impl FnOnce(&mut Writer<BufWriter<File>>) -> std::io::Result<()>,
+) -> Result<(), String> {
+    let out = BufWriter::new(File::create(file).map_err(|e| e.to_string())?);
+    let mut xml = Writer::new_with_indent(out, b' ', 2);
+    xml.write_event(Event::Decl(BytesDecl::new("1.0", None, None)))
+        .map_err(|e| e.to_string())?;
+    let mut root = xml
+        .create_element("VTKFile")
+        .with_attributes([("type", kind), ("version", version)])
+        .with_attribute(("byte_order", "LittleEndian"));
+    if let Some(header_type) = header_type {
+        root = root.with_attribute(("header_type", header_type));
+    }
+    root.write_inner_content(body).map_err(|e| e.to_string())?;
+    let mut out = xml.into_inner();
+    out.write_all(b"\n")
+        .and_then(|()| out.flush())
+        .map_err(|e| e.to_string())
+}
+
 /// The `.vtp` of time `k`.
 fn write_vtp(frames: &Frames, k: usize, file: &Path) -> Result<(), String> {
     let n = frames.n_nodes();
@@ -231,48 +314,45 @@ fn write_vtp(frames: &Frames, k: usize, file: &Path) -> Result<(), String> {
     for &p in &frames.pinned {
         pinned[p] = 1;
     }
-    let array = |name: &str, elem: ElementType, data: IOBuffer| {
-        Attribute::DataArray(DataArray {
-            name: name.into(),
-            elem,
-            data,
-        })
-    };
-    let scalars = ElementType::Scalars {
-        num_comp: 1,
-        lookup_table: None,
-    };
-    let piece = PolyDataPiece {
-        points: IOBuffer::F64(points),
-        lines: Some(VertexNumbers::XML {
-            connectivity,
-            offsets,
-        }),
-        data: Attributes {
-            point: vec![
-                array("velocity", ElementType::Vectors, IOBuffer::F64(velocity)),
-                array("node", scalars.clone(), IOBuffer::I32(node)),
-                array("pinned", scalars.clone(), IOBuffer::I32(pinned)),
-            ],
-            // `tension` first: ParaView colours by the first (active) scalars.
-            cell: vec![
-                array("tension", scalars.clone(), IOBuffer::F64(tension)),
-                array("kind", scalars.clone(), IOBuffer::I32(kind)),
-                array("number", scalars, IOBuffer::I32(number)),
-            ],
-        },
-        ..Default::default()
-    };
-    let vtk = Vtk {
-        version: Version::new((1, 0)),
-        title: String::new(),
-        byte_order: ByteOrder::LittleEndian,
-        data: DataSet::inline(piece),
-        file_path: None,
-    };
-    let mut out = BufWriter::new(File::create(file).map_err(|e| e.to_string())?);
-    vtk.write_xml(&mut out).map_err(|e| e.to_string())?;
-    out.flush().map_err(|e| e.to_string())
+    let (n_points, n_lines) = (n.to_string(), (nb + nc).to_string());
+    write_vtk_file(file, "PolyData", "1.0", Some("UInt64"), |xml| {
+        xml.create_element("PolyData").write_inner_content(|xml| {
+            xml.create_element("Piece")
+                .with_attributes([
+                    ("NumberOfPoints", n_points.as_str()),
+                    ("NumberOfVerts", "0"),
+                    ("NumberOfLines", n_lines.as_str()),
+                    ("NumberOfStrips", "0"),
+                    ("NumberOfPolys", "0"),
+                ])
+                .write_inner_content(|xml| {
+                    xml.create_element("PointData")
+                        .with_attributes([("Scalars", "node"), ("Vectors", "velocity")])
+                        .write_inner_content(|xml| {
+                            data_array(xml, Some("velocity"), 3, &velocity)?;
+                            data_array(xml, Some("node"), 1, &node)?;
+                            data_array(xml, Some("pinned"), 1, &pinned)
+                        })?;
+                    // `tension` is the active scalars: ParaView colours by it.
+                    xml.create_element("CellData")
+                        .with_attribute(("Scalars", "tension"))
+                        .write_inner_content(|xml| {
+                            data_array(xml, Some("tension"), 1, &tension)?;
+                            data_array(xml, Some("kind"), 1, &kind)?;
+                            data_array(xml, Some("number"), 1, &number)
+                        })?;
+                    xml.create_element("Points")
+                        .write_inner_content(|xml| data_array(xml, None, 3, &points))?;
+                    xml.create_element("Lines").write_inner_content(|xml| {
+                        data_array(xml, Some("connectivity"), 1, &connectivity)?;
+                        data_array(xml, Some("offsets"), 1, &offsets)
+                    })?;
+                    Ok(())
+                })?;
+            Ok(())
+        })?;
+        Ok(())
+    })
 }
 
 /// The VTK Collection listing one `DataSet` per time, files relative to the `.pvd`.
@@ -282,18 +362,22 @@ fn write_collection(
     names: &[String],
     file: &Path,
 ) -> Result<(), String> {
-    use quick_xml::escape::escape;
-    let mut text = String::with_capacity(200 + 80 * names.len());
-    text.push_str("<?xml version=\"1.0\"?>\n");
-    text.push_str(
-        "<VTKFile type=\"Collection\" version=\"0.1\" byte_order=\"LittleEndian\">\n  <Collection>\n",
-    );
-    for (t, name) in frames.times.iter().zip(names) {
-        let file = escape(format!("{folder_name}/{name}"));
-        text.push_str(&format!(
-            "    <DataSet timestep=\"{t}\" group=\"\" part=\"0\" file=\"{file}\"/>\n"
-        ));
-    }
-    text.push_str("  </Collection>\n</VTKFile>\n");
-    fs::write(file, text).map_err(|e| e.to_string())
+    write_vtk_file(file, "Collection", "0.1", None, |xml| {
+        xml.create_element("Collection")
+            .write_inner_content(|xml| {
+                for (t, name) in frames.times.iter().zip(names) {
+                    let (time, path) = (t.to_string(), format!("{folder_name}/{name}"));
+                    xml.create_element("DataSet")
+                        .with_attributes([
+                            ("timestep", time.as_str()),
+                            ("group", ""),
+                            ("part", "0"),
+                            ("file", path.as_str()),
+                        ])
+                        .write_empty()?;
+                }
+                Ok(())
+            })?;
+        Ok(())
+    })
 }
