@@ -5,6 +5,8 @@
 //! (the equations of motion) → [`integrator`] + [`correction`] → [`sim`] (a running
 //! simulation) → [`outputs`] (named quantities shared by CSV and FMU). [`analysis`]
 //! (equilibrium, modes, linear models) works on the model and the dynamics' tangent.
+//! Underneath, `linalg` (sparse 3 × 3 block factors, knowing no physics) solves the
+//! model's reaction system.
 #![warn(missing_docs)]
 
 pub mod analysis;
@@ -13,6 +15,7 @@ pub mod dynamics;
 pub mod error;
 pub mod fmi;
 pub mod integrator;
+pub(crate) mod linalg;
 pub mod model;
 pub mod outputs;
 pub mod partial;

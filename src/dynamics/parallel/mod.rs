@@ -30,7 +30,7 @@ pub use helper::{on_helper_thread, Helper};
 
 use super::effects::{self, ForceSink};
 use super::{first_responses, pairs, pairs_mut, Inputs, Workspace};
-use crate::model::block_cholesky::BlockLdl;
+use crate::linalg::block_cholesky::BlockLdl;
 use crate::model::Model;
 
 /// Structures from this many bars up evaluate on two threads (`bench`, measured side by

@@ -1,4 +1,4 @@
-//! K assembled into the side-by-side chains ([`crate::model::block_lanes`]) several bars at
+//! K assembled into the side-by-side chains ([`crate::linalg::block_lanes`]) several bars at
 //! a time.
 //!
 //! A tower's stage has one strut per chain, and the struts' contributions go to the same
@@ -14,8 +14,8 @@ use std::ops::Range;
 use nalgebra::Vector3;
 
 use super::Contribution;
-use crate::model::block_cholesky::{LOWER, SYMMETRIC};
-use crate::model::block_lanes::{lanes, LaneGroups, Lanes, LANES};
+use crate::linalg::block_lanes::{lanes, LaneGroups, Lanes, LANES};
+use crate::linalg::symmetric::{LOWER, SYMMETRIC};
 
 /// One contribution of each bar of a bundle to one block of the lanes.
 #[derive(Debug, Clone)]

@@ -10,10 +10,12 @@ use nalgebra::{DMatrix, DVector, Matrix3, Vector3};
 
 mod lanes;
 
-use super::block_cholesky::{BlockLdl, SharedFactor, Symmetric, SYMMETRIC};
-use super::block_lanes::LaneGroups;
 use super::coords::Coordinates;
 use super::inertia::BarInertia;
+use crate::linalg::block_cholesky::{BlockLdl, SharedFactor};
+use crate::linalg::block_lanes::LaneGroups;
+use crate::linalg::pattern::components;
+use crate::linalg::symmetric::{Symmetric, SYMMETRIC};
 use lanes::LaneAssembly;
 
 /// A constraint column touching a bar: (column, coefficient, end side 0/1).
@@ -124,7 +126,7 @@ impl Reactions {
                 .iter()
                 .flat_map(|t| t.windows(2).map(|w| (w[1].0, w[0].0)))
                 .collect();
-            super::block_lanes::components(nc, &coupled).concat()
+            components(nc, &coupled).concat()
         };
         let mut internal = vec![0; nc];
         for (p, &c) in order.iter().enumerate() {
