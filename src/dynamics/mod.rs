@@ -190,26 +190,15 @@ pub fn accelerations(
         let two = Arc::clone(two);
         return parallel::evaluate(model, (&two.0, &two.1), inputs, t, q, v, ws, acc);
     }
-    #[cfg(target_arch = "x86_64")]
-    if std::arch::is_x86_feature_detected!("avx2") {
-        // SAFETY: the processor has AVX2.
-        return unsafe { accelerations_avx2(model, inputs, t, q, v, ws, acc) };
-    }
-    evaluate(model, inputs, t, q, v, ws, acc)
-}
-
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2")]
-unsafe fn accelerations_avx2(
-    model: &Model,
-    inputs: &Inputs,
-    t: f64,
-    q: &[f64],
-    v: &[f64],
-    ws: &mut Workspace,
-    acc: &mut [f64],
-) {
-    evaluate(model, inputs, t, q, v, ws, acc)
+    crate::simd::dispatch!(evaluate(
+        model: &Model,
+        inputs: &Inputs,
+        t: f64,
+        q: &[f64],
+        v: &[f64],
+        ws: &mut Workspace,
+        acc: &mut [f64],
+    ))
 }
 
 /// The stages, inlined into each of [`accelerations`]' two versions (and, in the tests,
@@ -403,12 +392,8 @@ fn first_responses(
     out: (&mut [[Vector3<f64>; 2]], &mut [f64], &mut [BarKept]),
     add_bar: impl FnMut(usize, &Vector3<f64>, f64),
 ) {
-    #[cfg(target_arch = "x86_64")]
-    if std::arch::is_x86_feature_detected!("avx2") {
-        // SAFETY: the processor has AVX2.
-        return unsafe { bar_lanes::first_pass(model, given, out, add_bar) };
-    }
-    first_response(model, given, out, add_bar);
+    crate::simd::dispatch!(avx2 = bar_lanes::first_pass, portable = first_response;
+        model, given, out, add_bar)
 }
 
 /// The first λ pass over a run of bars from bar `first` on (given their end positions,
@@ -471,12 +456,8 @@ fn second_responses(
     given: (usize, &[BarKept], &[[Vector3<f64>; 2]]),
     out: (&mut [[Vector3<f64>; 2]], &mut [f64]),
 ) {
-    #[cfg(target_arch = "x86_64")]
-    if std::arch::is_x86_feature_detected!("avx2") {
-        // SAFETY: the processor has AVX2.
-        return unsafe { bar_lanes::second_pass(model, given, out) };
-    }
-    second_response(model, given, out);
+    crate::simd::dispatch!(avx2 = bar_lanes::second_pass, portable = second_response;
+        model, given, out)
 }
 
 /// The second λ pass over a run of bars from bar `first` on, bar by bar.

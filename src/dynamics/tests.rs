@@ -156,8 +156,7 @@ pub(super) fn reeled_and_dropped() -> [crate::scene::Scene; 2] {
 /// gravity and ground contact with friction (icosahedron-dropped), at states away from rest.
 #[test]
 fn the_avx2_evaluation_gives_the_portable_bits() {
-    #[cfg(target_arch = "x86_64")]
-    if !std::arch::is_x86_feature_detected!("avx2") {
+    if !crate::simd::has_avx2() {
         eprintln!("no AVX2 here: the baseline evaluation is compared with itself");
     }
     let [reeled, dropped] = reeled_and_dropped();

@@ -272,18 +272,11 @@ impl LaneGroups {
     /// Factors K as assembled and solves `K x = b` in place (`b` by original column);
     /// false if a pivot of any part fails (`b` is then overwritten too).
     pub fn factor_and_solve(&mut self, singular: f64, b: &mut [[f64; 3]]) -> bool {
-        #[cfg(target_arch = "x86_64")]
-        if std::arch::is_x86_feature_detected!("avx2") {
-            // SAFETY: the processor has AVX2.
-            return unsafe { self.factor_and_solve_avx2(singular, b) };
-        }
-        self.factor_and_solve_lanes(singular, b)
-    }
-
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx2")]
-    unsafe fn factor_and_solve_avx2(&mut self, singular: f64, b: &mut [[f64; 3]]) -> bool {
-        self.factor_and_solve_lanes(singular, b)
+        crate::simd::dispatch!(LaneGroups::factor_and_solve_lanes(
+            groups: &mut LaneGroups = self,
+            singular: f64,
+            b: &mut [[f64; 3]],
+        ) -> bool)
     }
 
     /// [`Self::factor_and_solve`] compiled for baseline x86-64 only (SSE2), as on a

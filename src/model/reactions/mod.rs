@@ -258,11 +258,7 @@ impl Reactions {
     /// bundles in the side-by-side chains.
     #[inline(always)]
     pub fn assemble_bars<'a>(&mut self, b: impl Fn(usize) -> (&'a Vector3<f64>, &'a f64)) {
-        #[cfg(target_arch = "x86_64")]
-        let avx2 = std::arch::is_x86_feature_detected!("avx2");
-        #[cfg(not(target_arch = "x86_64"))]
-        let avx2 = false;
-        self.assemble_bars_with(b, avx2);
+        self.assemble_bars_with(b, crate::simd::has_avx2());
     }
 
     /// [`Self::assemble_bars`], the bundles in AVX2 if `avx2` (the processor has it).
