@@ -14,7 +14,7 @@ use std::arch::x86_64::{
 
 use nalgebra::Vector3;
 
-use super::BarKept;
+use crate::dynamics::BarKept;
 use crate::model::inertia::InertiaLanes;
 use crate::model::Model;
 
