@@ -6,7 +6,8 @@
 //! simulation) → [`outputs`] (named quantities shared by CSV and FMU). [`analysis`]
 //! (equilibrium, modes, linear models) works on the model and the dynamics' tangent.
 //! Underneath, `linalg` (sparse 3 × 3 block factors, knowing no physics) solves the
-//! model's reaction system.
+//! model's reaction system, and `simd` runs the hot kernels' AVX2 copies where the
+//! processor has them.
 #![warn(missing_docs)]
 
 pub mod analysis;

@@ -222,7 +222,8 @@ impl LaneGroups {
         group.expect("a block of some group").used
     }
 
-    /// The lanes' block `block` of K, to assemble into.
+    /// The lanes' block `block` of K, to assemble into (by the AVX2 bundles).
+    #[cfg_attr(not(target_arch = "x86_64"), allow(dead_code))]
     pub(crate) fn block_mut(&mut self, block: usize) -> &mut Block {
         &mut self.k[block]
     }

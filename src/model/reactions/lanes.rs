@@ -8,6 +8,11 @@
 //! lane), lane by lane the same arithmetic, so K is the same bits. A bundle leaves empty
 //! only lanes without a part, which hold just 0 and 1: adding ±0 to them changes no bit, so
 //! a bundle stores whole blocks (a masked store was 1.2× slower than one bar at a time).
+// Bundles are assembled in AVX2 only: elsewhere their layout is built and left unused.
+#![cfg_attr(
+    not(target_arch = "x86_64"),
+    allow(dead_code, unused_imports, unused_variables)
+)]
 
 use std::ops::Range;
 
