@@ -16,18 +16,12 @@ impl CorrectionPlan {
     /// the processor has it (as the evaluation is, [`crate::dynamics::accelerations`]; the
     /// same bits).
     pub fn correct(&self, coords: &Coordinates, q: &mut [f64], v: &mut [f64]) {
-        #[cfg(target_arch = "x86_64")]
-        if std::arch::is_x86_feature_detected!("avx2") {
-            // SAFETY: the processor has AVX2.
-            return unsafe { self.correct_avx2(coords, q, v) };
-        }
-        self.correct_both(coords, q, v)
-    }
-
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx2")]
-    unsafe fn correct_avx2(&self, coords: &Coordinates, q: &mut [f64], v: &mut [f64]) {
-        self.correct_both(coords, q, v)
+        crate::simd::dispatch!(CorrectionPlan::correct_both(
+            plan: &CorrectionPlan = self,
+            coords: &Coordinates,
+            q: &mut [f64],
+            v: &mut [f64],
+        ))
     }
 
     #[inline(always)]

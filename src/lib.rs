@@ -5,6 +5,9 @@
 //! (the equations of motion) → [`integrator`] + [`correction`] → [`sim`] (a running
 //! simulation) → [`outputs`] (named quantities shared by CSV and FMU). [`analysis`]
 //! (equilibrium, modes, linear models) works on the model and the dynamics' tangent.
+//! Underneath, `linalg` (sparse 3 × 3 block factors, knowing no physics) solves the
+//! model's reaction system, and `simd` runs the hot kernels' AVX2 copies where the
+//! processor has them.
 #![warn(missing_docs)]
 
 pub mod analysis;
@@ -13,6 +16,7 @@ pub mod dynamics;
 pub mod error;
 pub mod fmi;
 pub mod integrator;
+pub(crate) mod linalg;
 pub mod model;
 pub mod numbers;
 pub mod outputs;
@@ -23,6 +27,7 @@ pub mod render;
 pub mod report;
 pub mod scene;
 pub mod sim;
+mod simd;
 
 pub use error::{SceneError, StepError};
 pub use model::Model;

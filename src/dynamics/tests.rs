@@ -149,15 +149,14 @@ pub(super) fn reeled_and_dropped() -> [crate::scene::Scene; 2] {
 
 /// The evaluation compiled for AVX2 (used where the processor has it) gives the bits of
 /// the baseline x86-64 one (whose lanes' factor, λ passes and K's bundles still pick AVX2
-/// themselves: those are compared in `block_cholesky`, `bar_lanes` and `reactions`), for
+/// themselves: those are compared in `block_cholesky`, `bar_response::lanes` and `reactions`), for
 /// every kind of effect: joints side by side and force
 /// inputs (tower20), controlled cables in the sparse and the dense basis (prism2), a reeled
 /// cable and a scripted sinusoidal load (prism2-elastic), and damped cables, payloads,
 /// gravity and ground contact with friction (icosahedron-dropped), at states away from rest.
 #[test]
 fn the_avx2_evaluation_gives_the_portable_bits() {
-    #[cfg(target_arch = "x86_64")]
-    if !std::arch::is_x86_feature_detected!("avx2") {
+    if !crate::simd::has_avx2() {
         eprintln!("no AVX2 here: the baseline evaluation is compared with itself");
     }
     let [reeled, dropped] = reeled_and_dropped();

@@ -13,6 +13,7 @@ pub mod instance;
 pub mod package;
 mod parameters;
 pub mod snapshot;
+mod state;
 pub mod variables;
 
 use sha2::{Digest, Sha256};

@@ -6,8 +6,8 @@
 use nalgebra::Vector3;
 use sha2::{Digest, Sha256};
 
-use super::instance::Core;
 use super::parameters::apply_parameter;
+use super::state::Core;
 use super::variables::Binding;
 use super::Mode;
 use crate::sim::{Simulation, State};

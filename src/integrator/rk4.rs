@@ -37,17 +37,7 @@ fn stage_part(s: &mut [f64], y: &[f64], c: f64, k: &[f64]) {
             *s = y + c * k;
         }
     }
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx2")]
-    fn kernel_avx2(s: &mut [f64], y: &[f64], c: f64, k: &[f64]) {
-        kernel(s, y, c, k);
-    }
-    #[cfg(target_arch = "x86_64")]
-    if std::arch::is_x86_feature_detected!("avx2") {
-        // SAFETY: the processor has AVX2.
-        return unsafe { kernel_avx2(s, y, c, k) };
-    }
-    kernel(s, y, c, k);
+    crate::simd::dispatch!(kernel(s: &mut [f64], y: &[f64], c: f64, k: &[f64]))
 }
 
 /// `y += h/6 (k₁ + 2k₂ + 2k₃ + k₄)` over a part.
@@ -60,17 +50,7 @@ fn combine_part(y: &mut [f64], h: f64, [k1, k2, k3, k4]: [&[f64]; 4]) {
             *y += h / 6.0 * (a + 2.0 * b + 2.0 * c + d);
         }
     }
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx2")]
-    fn kernel_avx2(y: &mut [f64], h: f64, k: [&[f64]; 4]) {
-        kernel(y, h, k);
-    }
-    #[cfg(target_arch = "x86_64")]
-    if std::arch::is_x86_feature_detected!("avx2") {
-        // SAFETY: the processor has AVX2.
-        return unsafe { kernel_avx2(y, h, [k1, k2, k3, k4]) };
-    }
-    kernel(y, h, [k1, k2, k3, k4]);
+    crate::simd::dispatch!(kernel(y: &mut [f64], h: f64, k: [&[f64]; 4] = [k1, k2, k3, k4]))
 }
 
 impl Integrator for Rk4 {

@@ -129,7 +129,7 @@ pub(crate) struct Directions {
 
 impl Directions {
     fn new(per_bar: &[Vec<(usize, f64)>]) -> Self {
-        let (start, terms) = super::flatten(per_bar);
+        let (start, terms) = crate::linalg::pattern::flatten(per_bar);
         Self { start, terms }
     }
 

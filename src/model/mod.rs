@@ -1,8 +1,6 @@
 //! The immutable model built once from a validated scene: topology, masses, laws,
 //! the constraint basis, the correction plan and the reaction-system layout.
 
-pub(crate) mod block_cholesky;
-mod block_lanes;
 pub mod contact;
 pub mod coords;
 pub mod correction_plan;
@@ -24,19 +22,6 @@ use effects::Pipeline;
 use inertia::{BarInertia, InertiaLanes};
 use reactions::Reactions;
 use supports::Support;
-
-/// Lists laid end to end (compressed sparse rows): list `i` is
-/// `items[start[i]..start[i + 1]]`.
-pub(crate) fn flatten<T: Copy>(lists: &[Vec<T>]) -> (Vec<usize>, Vec<T>) {
-    let mut start = Vec::with_capacity(lists.len() + 1);
-    let mut items = Vec::with_capacity(lists.iter().map(Vec::len).sum());
-    start.push(0);
-    for list in lists {
-        items.extend_from_slice(list);
-        start.push(items.len());
-    }
-    (start, items)
-}
 
 /// A rigid bar between physical nodes (0-based).
 #[derive(Debug, Clone, PartialEq)]

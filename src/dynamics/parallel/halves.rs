@@ -1,7 +1,7 @@
 //! How an evaluation is split between the two threads: the plan built once per workspace.
 
 use crate::dynamics::effects::ForceEffect;
-use crate::model::block_cholesky::BlockLdl;
+use crate::linalg::block_cholesky::BlockLdl;
 use crate::model::effects::CableLink;
 use crate::model::Model;
 

@@ -28,9 +28,10 @@ use halves::OTHER;
 use handoff::Handoff;
 pub use helper::{on_helper_thread, Helper};
 
+use super::bar_response::{first_responses, pairs, pairs_mut};
 use super::effects::{self, ForceSink};
-use super::{first_responses, pairs, pairs_mut, Inputs, Workspace};
-use crate::model::block_cholesky::BlockLdl;
+use super::{Inputs, Workspace};
+use crate::linalg::block_cholesky::BlockLdl;
 use crate::model::Model;
 
 /// Structures from this many bars up evaluate on two threads (`bench`, measured side by
@@ -277,7 +278,7 @@ pub(super) fn evaluate(
                 // A self-stressed frame: K again from the kept bar vectors (the factor
                 // may have overwritten it), then the one-thread path, which fails the same way and
                 // takes the dense solve.
-                super::assemble_kept(&mut ws.reactions, &ws.bars);
+                super::bar_response::assemble_kept(&mut ws.reactions, &ws.bars);
                 super::add_reactions(ws);
             }
             // Stage 5: λ and the end accelerations again, and their scatter.
@@ -285,8 +286,20 @@ pub(super) fn evaluate(
             let (l0, l1) = ws.lambda.split_at_mut(b);
             let (kept, forces) = (ws.bars.as_slice(), pairs(&ws.end_force));
             helper.join(
-                || super::second_responses(model, (0, &kept[..b], &forces[..b]), (acc0, l0)),
-                || super::second_responses(model, (b, &kept[b..], &forces[b..]), (acc1, l1)),
+                || {
+                    super::bar_response::second_responses(
+                        model,
+                        (0, &kept[..b], &forces[..b]),
+                        (acc0, l0),
+                    )
+                },
+                || {
+                    super::bar_response::second_responses(
+                        model,
+                        (b, &kept[b..], &forces[b..]),
+                        (acc1, l1),
+                    )
+                },
             );
         }
         // The accelerations of the reduced nodes; the second half skips those the first

@@ -1,4 +1,4 @@
-//! K assembled into the side-by-side chains ([`crate::model::block_lanes`]) several bars at
+//! K assembled into the side-by-side chains ([`crate::linalg::block_lanes`]) several bars at
 //! a time.
 //!
 //! A tower's stage has one strut per chain, and the struts' contributions go to the same
@@ -8,14 +8,19 @@
 //! lane), lane by lane the same arithmetic, so K is the same bits. A bundle leaves empty
 //! only lanes without a part, which hold just 0 and 1: adding ±0 to them changes no bit, so
 //! a bundle stores whole blocks (a masked store was 1.2× slower than one bar at a time).
+// Bundles are assembled in AVX2 only: elsewhere their layout is built and left unused.
+#![cfg_attr(
+    not(target_arch = "x86_64"),
+    allow(dead_code, unused_imports, unused_variables)
+)]
 
 use std::ops::Range;
 
 use nalgebra::Vector3;
 
 use super::Contribution;
-use crate::model::block_cholesky::{LOWER, SYMMETRIC};
-use crate::model::block_lanes::{lanes, LaneGroups, Lanes, LANES};
+use crate::linalg::block_lanes::{lanes, LaneGroups, Lanes, LANES};
+use crate::linalg::symmetric::{LOWER, SYMMETRIC};
 
 /// One contribution of each bar of a bundle to one block of the lanes.
 #[derive(Debug, Clone)]

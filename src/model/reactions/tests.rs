@@ -106,8 +106,7 @@ fn the_towers_chains_go_side_by_side() {
 /// the first left), through the AVX2 code and the bar-by-bar fallback.
 #[test]
 fn bundled_assembly_gives_the_bits_of_bar_by_bar() {
-    #[cfg(target_arch = "x86_64")]
-    if !std::arch::is_x86_feature_detected!("avx2") {
+    if !crate::simd::has_avx2() {
         eprintln!("no AVX2 here: only the fallback is compared");
     }
     let model = Model::new(&crate::scene::builtin("tower20").unwrap()).unwrap();
@@ -136,7 +135,7 @@ fn bundled_assembly_gives_the_bits_of_bar_by_bar() {
                 -(f * 0.3).sin(),
             )
         };
-        let avx2 = avx2 && std::arch::is_x86_feature_detected!("avx2");
+        let avx2 = avx2 && crate::simd::has_avx2();
         let kept: Vec<_> = (0..model.bars.len())
             .map(|bar| (b(bar), 1.0 / b(bar).norm_squared()))
             .collect();

@@ -1,7 +1,7 @@
 //! The tests of [`super`].
 
 use super::*;
-use nalgebra::DMatrix;
+use nalgebra::{DMatrix, Vector3};
 
 /// K with random blocks on `pattern` and random SPD diagonal blocks, and a random
 /// right-hand side.

@@ -14,7 +14,7 @@ use std::arch::x86_64::{
 
 use nalgebra::Vector3;
 
-use super::BarKept;
+use crate::dynamics::BarKept;
 use crate::model::inertia::InertiaLanes;
 use crate::model::Model;
 
@@ -357,7 +357,7 @@ mod tests {
     /// (`−|ḃ|²` of −0), zero forces and forces of both signs.
     #[test]
     fn four_at_a_time_gives_the_bits_of_one_at_a_time() {
-        if !std::arch::is_x86_feature_detected!("avx2") {
+        if !crate::simd::has_avx2() {
             eprintln!("no AVX2 here: nothing to compare");
             return;
         }

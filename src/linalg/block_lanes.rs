@@ -10,10 +10,11 @@
 
 use nalgebra::Matrix3;
 
-use super::block_cholesky::{summed, BlockLdl, Pattern, Symmetric};
+use super::pattern::{components, Pattern};
+use super::symmetric::{summed, Symmetric};
 
 /// Parts per group.
-pub(super) const LANES: usize = 4;
+pub(crate) const LANES: usize = 4;
 
 /// The most memory the lanes' K and factor may take. Beyond it (about 4,000 tower bars)
 /// the 4-wide arrays stream from L3 or memory and cost more than the lanes save (`bench`,
@@ -26,7 +27,7 @@ const MAX_BYTES: usize = 2 << 20;
 /// pass its value on to the next load of it).
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[repr(C, align(32))]
-pub(super) struct Lanes(pub [f64; LANES]);
+pub(crate) struct Lanes(pub [f64; LANES]);
 
 impl std::ops::Deref for Lanes {
     type Target = [f64; LANES];
@@ -44,7 +45,7 @@ impl std::ops::DerefMut for Lanes {
 /// All lanes zero.
 const ZERO: Lanes = Lanes([0.0; LANES]);
 /// One 3 × 3 block per lane, entry (i, j) at `3 j + i` (nalgebra's order).
-pub(super) type Block = [Lanes; 9];
+pub(crate) type Block = [Lanes; 9];
 
 /// K's parts in groups of identical ones. K is assembled straight into the groups'
 /// layout (no gather before each factor).
@@ -76,15 +77,17 @@ struct LaneGroup {
 }
 
 impl LaneGroups {
-    /// Groups `chol`'s connected components by their pattern, if K is made of at least two
-    /// components and each has at least one twin (else the scalar factor is as good).
-    pub fn find(chol: &BlockLdl, lower_blocks: &[(usize, usize)]) -> Option<Self> {
-        let components = components(chol.size(), lower_blocks);
+    /// Groups the connected components of K (its factor's `scalar` pattern, of
+    /// `lower_blocks`) by their pattern, if K is made of at least two components and each has
+    /// at least one twin (else the scalar factor is as good).
+    pub fn find(scalar: &Pattern, lower_blocks: &[(usize, usize)]) -> Option<Self> {
+        let n = scalar.columns();
+        let components = components(n, lower_blocks);
         if components.len() < 2 {
             return None;
         }
-        let mut local = vec![0; chol.size()];
-        let mut component_of = vec![0; chol.size()];
+        let mut local = vec![0; n];
+        let mut component_of = vec![0; n];
         for (i, columns) in components.iter().enumerate() {
             for (k, &c) in columns.iter().enumerate() {
                 local[c] = k;
@@ -131,12 +134,12 @@ impl LaneGroups {
         let mut lanes = Self {
             groups: Vec::new(),
             k: Vec::new(),
-            lane_of: vec![usize::MAX; chol.slots()],
+            lane_of: vec![usize::MAX; scalar.slots()],
         };
         for (class, pattern) in classes.iter().zip(&patterns) {
             for members in class.chunks(LANES) {
                 let parts: Vec<&[usize]> = members.iter().map(|&i| &components[i][..]).collect();
-                lanes.add_group(chol, &parts, pattern.clone())?;
+                lanes.add_group(scalar, &parts, pattern.clone())?;
             }
         }
         // Every component is in a group, and its fill is its share of K's: every slot has
@@ -146,8 +149,8 @@ impl LaneGroups {
     }
 
     /// Adds a group of `parts` (each its original columns, in order) of the common
-    /// `pattern`.
-    fn add_group(&mut self, chol: &BlockLdl, parts: &[&[usize]], pattern: Pattern) -> Option<()> {
+    /// `pattern`, K's slots found in its `scalar` pattern.
+    fn add_group(&mut self, scalar: &Pattern, parts: &[&[usize]], pattern: Pattern) -> Option<()> {
         let m = parts[0].len();
         let k_start = self.k.len();
         let mut columns = vec![[0; LANES]; m];
@@ -156,7 +159,7 @@ impl LaneGroups {
                 columns[c][lane] = part[c];
                 for p in pattern.l_start[c]..pattern.l_start[c + 1] {
                     // Fill is the same as in K's own factor: a part keeps its columns' order.
-                    let slot = chol.k_index(part[pattern.l_rows[p]], part[c])?;
+                    let slot = scalar.slot(part[pattern.l_rows[p]], part[c])?;
                     self.lane_of[slot] = (k_start + p) * LANES + lane;
                 }
             }
@@ -204,14 +207,14 @@ impl LaneGroups {
 
     /// Where K's block at `slot` of the scalar layout lies: its block of the lanes and its
     /// lane.
-    pub(super) fn position(&self, slot: usize) -> (usize, usize) {
+    pub(crate) fn position(&self, slot: usize) -> (usize, usize) {
         let at = self.lane_of[slot];
         (at / LANES, at % LANES)
     }
 
     /// How many lanes of the lanes' block `block` hold a part (the others hold only 0 and
     /// the 1 of identity pivots, before and after a factor).
-    pub(super) fn used_lanes(&self, block: usize) -> usize {
+    pub(crate) fn used_lanes(&self, block: usize) -> usize {
         let group = self
             .groups
             .iter()
@@ -219,14 +222,15 @@ impl LaneGroups {
         group.expect("a block of some group").used
     }
 
-    /// The lanes' block `block` of K, to assemble into.
-    pub(super) fn block_mut(&mut self, block: usize) -> &mut Block {
+    /// The lanes' block `block` of K, to assemble into (by the AVX2 bundles).
+    #[cfg_attr(not(target_arch = "x86_64"), allow(dead_code))]
+    pub(crate) fn block_mut(&mut self, block: usize) -> &mut Block {
         &mut self.k[block]
     }
 
     /// Every lane of K's blocks, unused lanes included, as bits.
     #[cfg(test)]
-    pub(super) fn k_bits(&self) -> Vec<u64> {
+    pub(crate) fn k_bits(&self) -> Vec<u64> {
         let entries = self.k.iter().flatten().flat_map(|lanes| lanes.0);
         entries.map(f64::to_bits).collect()
     }
@@ -269,18 +273,11 @@ impl LaneGroups {
     /// Factors K as assembled and solves `K x = b` in place (`b` by original column);
     /// false if a pivot of any part fails (`b` is then overwritten too).
     pub fn factor_and_solve(&mut self, singular: f64, b: &mut [[f64; 3]]) -> bool {
-        #[cfg(target_arch = "x86_64")]
-        if std::arch::is_x86_feature_detected!("avx2") {
-            // SAFETY: the processor has AVX2.
-            return unsafe { self.factor_and_solve_avx2(singular, b) };
-        }
-        self.factor_and_solve_lanes(singular, b)
-    }
-
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx2")]
-    unsafe fn factor_and_solve_avx2(&mut self, singular: f64, b: &mut [[f64; 3]]) -> bool {
-        self.factor_and_solve_lanes(singular, b)
+        crate::simd::dispatch!(LaneGroups::factor_and_solve_lanes(
+            groups: &mut LaneGroups = self,
+            singular: f64,
+            b: &mut [[f64; 3]],
+        ) -> bool)
     }
 
     /// [`Self::factor_and_solve`] compiled for baseline x86-64 only (SSE2), as on a
@@ -380,7 +377,7 @@ impl LaneGroup {
 
 /// A lane-wise value.
 #[inline(always)]
-pub(super) fn lanes(f: impl Fn(usize) -> f64) -> Lanes {
+pub(crate) fn lanes(f: impl Fn(usize) -> f64) -> Lanes {
     Lanes(std::array::from_fn(f))
 }
 
@@ -457,27 +454,4 @@ fn inverse3(a: &Block, tiny: f64, used: usize, inv: &mut Block) -> bool {
         scaled(m2),
     ];
     true
-}
-
-/// The connected components of the block pattern, each its columns in order, ordered by
-/// their first column.
-pub(super) fn components(n: usize, lower_blocks: &[(usize, usize)]) -> Vec<Vec<usize>> {
-    fn find(root: &mut [usize], mut c: usize) -> usize {
-        while root[c] != c {
-            root[c] = root[root[c]];
-            c = root[c];
-        }
-        c
-    }
-    let mut root: Vec<usize> = (0..n).collect();
-    for &(r, c) in lower_blocks {
-        let (a, b) = (find(&mut root, r), find(&mut root, c));
-        root[a.max(b)] = a.min(b);
-    }
-    let mut members: Vec<Vec<usize>> = vec![Vec::new(); n];
-    for c in 0..n {
-        let r = find(&mut root, c);
-        members[r].push(c);
-    }
-    members.into_iter().filter(|m| !m.is_empty()).collect()
 }
