@@ -5,8 +5,7 @@
 
 use plotters::prelude::*;
 
-use super::picture::{plot_rect, Style};
-use super::view::{project, Fit};
+use super::view::{plot_rect, project, Fit, Style};
 use super::Frames;
 
 /// A label's box in pixels, corners included: `x0 ≤ x ≤ x1`, `y0 ≤ y ≤ y1`.

@@ -13,7 +13,8 @@ use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
 
 use super::labels::{self, LabelKind};
-use super::view::{depth, project, Fit};
+use super::view::{depth, project, Fit, BAR_W, TITLE_H};
+pub use super::view::{plot_rect, Style};
 use super::Frames;
 
 /// Bars.
@@ -57,51 +58,8 @@ pub fn is_slack(t: f64, max: f64) -> bool {
     !(t > SLACK_FRACTION * max && t > 0.0)
 }
 
-/// The camera and what to draw besides the structure.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Style {
-    /// Degrees, see [`super::view::project`].
-    pub azimuth: f64,
-    /// Degrees, see [`super::view::project`].
-    pub elevation: f64,
-    /// Node, bar and cable numbers.
-    pub labels: bool,
-    /// The scene name and time above the picture.
-    pub title: bool,
-    /// The tension colour bar on the right.
-    pub colour_bar: bool,
-}
-
-impl Style {
-    /// A full picture (title and colour bar) from the given direction.
-    pub fn new(azimuth: f64, elevation: f64, labels: bool) -> Self {
-        Self {
-            azimuth,
-            elevation,
-            labels,
-            title: true,
-            colour_bar: true,
-        }
-    }
-}
-
 /// Size of a PNG picture, pixels.
 pub const PNG_SIZE: (u32, u32) = (900, 760);
-
-const TITLE_H: i32 = 44;
-const BAR_W: i32 = 130;
-const MARGIN: i32 = 24;
-/// Room below the lowest node for its pin triangle, pixels.
-const MARKER: i32 = 14;
-
-/// The pixel rectangle `(left, top, right, bottom)` the structure is fitted into.
-pub fn plot_rect(size: (u32, u32), style: &Style) -> (i32, i32, i32, i32) {
-    let (w, h) = (size.0 as i32, size.1 as i32);
-    let m = if style.title { MARGIN } else { MARGIN / 3 };
-    let top = if style.title { TITLE_H } else { 0 } + m;
-    let right = w - if style.colour_bar { BAR_W } else { 0 } - m;
-    (m, top, right, h - m - MARKER)
-}
 
 /// The fit of the whole run (every node at every time, and the ground quad) into a
 /// picture of `size` pixels: the same for every frame of an animation.

@@ -1,5 +1,6 @@
 //! The orthographic camera of the pictures: a direction given by azimuth and elevation,
-//! and the fit of the projected structure to a pixel rectangle.
+//! the fit of the projected structure to a pixel rectangle, and the picture's layout
+//! (where the structure, the title and the colour bar go).
 
 /// Default azimuth, degrees: the camera 30° counter-clockwise from +x, seen from above z.
 pub const DEFAULT_AZIMUTH: f64 = 30.0;
@@ -80,6 +81,49 @@ impl Fit {
         let py = self.pixel_centre.1 - (y - self.centre.1) * self.scale;
         (px.round() as i32, py.round() as i32)
     }
+}
+
+/// The camera and what to draw besides the structure.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Style {
+    /// Degrees, see [`project`].
+    pub azimuth: f64,
+    /// Degrees, see [`project`].
+    pub elevation: f64,
+    /// Node, bar and cable numbers.
+    pub labels: bool,
+    /// The scene name and time above the picture.
+    pub title: bool,
+    /// The tension colour bar on the right.
+    pub colour_bar: bool,
+}
+
+impl Style {
+    /// A full picture (title and colour bar) from the given direction.
+    pub fn new(azimuth: f64, elevation: f64, labels: bool) -> Self {
+        Self {
+            azimuth,
+            elevation,
+            labels,
+            title: true,
+            colour_bar: true,
+        }
+    }
+}
+
+pub(super) const TITLE_H: i32 = 44;
+pub(super) const BAR_W: i32 = 130;
+const MARGIN: i32 = 24;
+/// Room below the lowest node for its pin triangle, pixels.
+const MARKER: i32 = 14;
+
+/// The pixel rectangle `(left, top, right, bottom)` the structure is fitted into.
+pub fn plot_rect(size: (u32, u32), style: &Style) -> (i32, i32, i32, i32) {
+    let (w, h) = (size.0 as i32, size.1 as i32);
+    let m = if style.title { MARGIN } else { MARGIN / 3 };
+    let top = if style.title { TITLE_H } else { 0 } + m;
+    let right = w - if style.colour_bar { BAR_W } else { 0 } - m;
+    (m, top, right, h - m - MARKER)
 }
 
 #[cfg(test)]
