@@ -312,7 +312,7 @@ mod tests {
         let text = csv(&[run]);
         let lines: Vec<&str> = text.lines().collect();
         assert_eq!(lines[0], COLUMNS.join(","));
-        assert_eq!(lines[1], "rk4,1e-3,on,failed,,,,,,");
+        assert_eq!(lines[1], "rk4,0.001,on,failed,,,,,,");
         assert!(recommend(&[], 1e-3, &[]).is_none());
     }
 
