@@ -37,4 +37,4 @@ for r in shown:
 PY
 ./target/release/tensegrity-fmu render prism2 --csv out/prism2-out.csv -o out/prism2-out.gif --fps 25 >/dev/null
 echo "== the run, rendered: out/prism2-out.gif"
-echo "== next: .venv/bin/python fmu/examples/simulate.py out/prism2.fmu --plot out/prism2.png"
+echo "== next: .venv/bin/python fmu/examples/simulate.py out/prism2.fmu --input 'node[7].fx=2' --plot out/prism2.png"
