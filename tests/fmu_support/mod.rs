@@ -16,14 +16,16 @@ fn profile_dir() -> PathBuf {
 
 /// The generic FMU binary, (re)built with cargo: it must come from the same sources as the
 /// CLI, whose build id goes into the GUID that `fmi2Instantiate` checks. The build is a
-/// no-op when `cargo test --workspace` already built it.
+/// no-op after `cargo build --workspace`; it builds the whole workspace, not `-p` the FMU
+/// crate alone, so that the library's features (the `cli` feature, which a build of the FMU
+/// crate alone leaves out) are the same and the next workspace build has nothing to redo.
 fn fmu_binary() -> PathBuf {
     let dir = profile_dir();
     let target_dir = dir.parent().expect("target directory");
     let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".to_owned());
     let mut cmd = Command::new(cargo);
     cmd.current_dir(env!("CARGO_MANIFEST_DIR"))
-        .args(["build", "-p", "tensegrity-fmu-binary", "--target-dir"])
+        .args(["build", "--workspace", "--target-dir"])
         .arg(target_dir);
     if dir.file_name().is_some_and(|n| n == "release") {
         cmd.arg("--release");
@@ -31,7 +33,7 @@ fn fmu_binary() -> PathBuf {
     let status = cmd.status().expect("run cargo build for the FMU binary");
     assert!(
         status.success(),
-        "cargo build -p tensegrity-fmu-binary failed"
+        "cargo build --workspace (for the FMU binary) failed"
     );
     let so = dir.join("libtensegrity_fmu_binary.so");
     assert!(so.is_file(), "{} is missing after the build", so.display());
