@@ -27,7 +27,7 @@ import numpy as np
 from fmpy import extract
 from fmpy.fmi2 import FMU2Slave
 
-from fmu_variables import FmuVariables, Parser, check_fmu, fail
+from fmu_variables import FmuVariables, Parser, check_fmu, fail, run_main
 
 SHORTENING = 0.02  # the cable's target length is 2 % shorter than at the start
 KP_DENSITY, KD_DENSITY = 300.0, 30.0  # N/m per m, N/m per m/s
@@ -149,4 +149,4 @@ def main(argv=None):
 
 
 if __name__ == "__main__":
-    main()
+    run_main(main)

@@ -30,6 +30,20 @@ def fail(message):
     sys.exit(2)
 
 
+def run_main(main):
+    """Runs an example's `main`: a call that the FMU refuses (a value out of range, a step
+    beyond the solver's limits) or a file that can't be written ends the program with the
+    reason on one line and exit status 1, not a traceback; Ctrl-C ends it quietly."""
+    try:
+        main()
+    except KeyboardInterrupt:
+        sys.exit(130)
+    except Exception as e:  # noqa: BLE001 - every failure becomes one line for the user
+        message = str(e).strip().splitlines()[0] if str(e).strip() else type(e).__name__
+        print(f"{Path(sys.argv[0]).name}: error: {message}", file=sys.stderr)
+        sys.exit(1)
+
+
 class Parser(argparse.ArgumentParser):
     """argparse whose errors are one line (no usage block) with exit status 2."""
 

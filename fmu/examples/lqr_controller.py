@@ -43,7 +43,7 @@ import numpy as np
 from fmpy import extract
 from fmpy.fmi2 import FMU2Slave
 
-from fmu_variables import FmuVariables, Parser, check_fmu, fail
+from fmu_variables import FmuVariables, Parser, check_fmu, fail, run_main
 
 REPO = Path(__file__).resolve().parents[2]
 
@@ -293,4 +293,4 @@ def main(argv=None):
 
 
 if __name__ == "__main__":
-    main()
+    run_main(main)

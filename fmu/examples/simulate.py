@@ -15,7 +15,7 @@ import sys
 import numpy as np
 from fmpy import simulate_fmu
 
-from fmu_variables import FmuVariables, Parser, check_fmu, fail
+from fmu_variables import FmuVariables, Parser, check_fmu, fail, run_main
 
 SHOWN_NODES = 12  # a structure with more nodes shows the ones that moved most
 
@@ -140,4 +140,4 @@ def main(argv=None):
 
 
 if __name__ == "__main__":
-    main()
+    run_main(main)

@@ -122,6 +122,21 @@ def test_simulate_rejects_an_unknown_input_and_a_bad_stop_time(scene_fmus):
     one_line_error(run_example("simulate.py", fmu.path, "--stop-time", "-1"), "--stop-time")
 
 
+def test_simulate_passes_on_what_the_fmu_refuses_in_one_line(scene_fmus, tmp_path):
+    """A value the FMU refuses, and a picture format matplotlib can't write: the reason on one
+    line (the FMU's log goes to stdout), exit status 1, no traceback."""
+    fmu = scene_fmus["prism2"]
+    res = run_example("simulate.py", fmu.path, "--input", "cable[1].force_density=nan")
+    assert res.returncode == 1 and "Traceback" not in res.stderr, res.stderr
+    assert res.stderr.strip().splitlines()[-1] == "simulate.py: error: fmi2SetReal failed with status 3 (error)."
+    assert "cable[1].force_density = NaN is not a finite number" in res.stdout  # the FMU's log
+    res = run_example("simulate.py", fmu.path, "--plot", tmp_path / "run.xyz")
+    assert res.returncode == 1 and "Traceback" not in res.stderr, res.stderr
+    assert res.stderr.strip().splitlines() == [res.stderr.strip()]
+    assert "Format 'xyz' is not supported" in res.stderr
+    assert not (tmp_path / "run.xyz").exists()
+
+
 # ---------------------------------------------------------------- controller.py
 
 
