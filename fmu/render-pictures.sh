@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Regenerates the README's pictures in fmu/pictures/ with `tensegrity-fmu render`:
+# Regenerates the pictures of the README and docs/ in fmu/pictures/ with `tensegrity-fmu render`:
 # each built-in scene at its start, and the dropped icosahedron coming to rest.
 set -euo pipefail
 cd "$(dirname "${BASH_SOURCE[0]}")/.."

@@ -21,7 +21,7 @@ fn labelled() -> Style {
 }
 
 /// The scenes whose labelled pictures are checked: every built-in at its start, and the
-/// dropped icosahedron at impact (the README's labelled picture).
+/// dropped icosahedron at impact (the labelled picture in docs/render.md).
 fn pictures() -> Vec<(String, Frames)> {
     let mut all: Vec<(String, Frames)> = builtin_names()
         .iter()

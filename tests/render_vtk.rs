@@ -429,7 +429,7 @@ fn a_second_write_replaces_the_series_and_failures_leave_nothing() {
     assert_eq!(entries(&blocked), [squatter]);
 }
 
-/// The figures for the README: tower20, 10 s at 30 frames per second (301 files).
+/// The figures in docs/benchmarks.md: tower20, 10 s at 30 frames per second (301 files).
 /// `cargo test --release --test render_vtk -- --nocapture tower20`
 #[test]
 fn tower20_ten_seconds_at_30_fps() {

@@ -5,7 +5,7 @@
 Runs every sample of SPEC.toml (the full grid of [parameters], or [random] draws) on a
 Dask LocalCluster of N worker processes, or on the workers of a running scheduler, and
 writes DIR/results.csv (a row per sample, as each finishes) and DIR/summary.png. The spec
-format is in the README ("Sweeps on Dask").
+format is in docs/sweeps.md.
 """
 
 import argparse

@@ -8,7 +8,7 @@
 //!   (the same bytes): the outputs, formatted as shortest round-trip decimals into a
 //!   `BufWriter` (`outputs::RowWriter`), here over `io::sink()` so that the disk's speed is
 //!   not what is measured;
-//! - a row as it was written before: `write!(w, ",{:e}", value)` per value into the same
+//! - a row of `{:e}` numbers, for comparison: `write!(w, ",{:e}", value)` per value into the same
 //!   kind of writer (kept here only to show the difference);
 //! - reading the row's values alone (what is left of a row without the formatting), output
 //!   by output as `RowWriter` does, and with `outputs::RowReader` as `RowThread` does;
@@ -102,7 +102,7 @@ pub fn run(seconds: f64, repeats: usize) -> Result<(), String> {
             c.values,
         ),
         (
-            "CSV row as before: `write!(w, \",{:e}\", value)` per value".into(),
+            "CSV row of `{:e}` numbers: `write!(w, \",{:e}\", value)` per value".into(),
             c.old_row,
         ),
         ("refresh before a row (one evaluation)".into(), c.refresh),

@@ -146,8 +146,8 @@ enum Command {
 /// Benchmarks beyond the default scaling one.
 #[derive(Subcommand, Debug)]
 enum BenchCommand {
-    /// µs per CSV row of `simulate` next to µs per tower20 step, with the ratio (and the
-    /// row as it was written before, for comparison).
+    /// µs per CSV row of `simulate` next to µs per tower20 step, with the ratio (and a row
+    /// of `{:e}` numbers, for comparison).
     Csv {
         /// Wall time per measured quantity, s, shared among its repeats.
         #[arg(long, default_value_t = 1.0)]

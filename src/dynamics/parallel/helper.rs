@@ -27,8 +27,8 @@ const EXIT: u32 = 3;
 
 // Waking a sleeping thread costs a system call on both sides and, on a shared virtual
 // machine, tens of microseconds or more before it runs; with waits that slept after 50 µs,
-// a 60,000-bar step took 1.12–1.3× as long as with these (paired medians; the README's
-// performance section). The price: a waiting thread keeps its core busy, yielding it to
+// a 60,000-bar step took 1.12–1.3× as long as with these (paired medians; see
+// docs/benchmarks.md). The price: a waiting thread keeps its core busy, yielding it to
 // any other thread runnable there, for up to the patience below after its last job.
 
 /// How long the helper waits for its next job before it sleeps: the stages of one

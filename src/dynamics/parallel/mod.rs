@@ -35,7 +35,7 @@ use crate::linalg::block_cholesky::BlockLdl;
 use crate::model::Model;
 
 /// Structures from this many bars up evaluate on two threads (`bench`, measured side by
-/// side: see the README's performance section).
+/// side: see docs/benchmarks.md).
 pub const MIN_BARS: usize = 4_000;
 
 /// A slice two threads write at disjoint indices.
