@@ -154,13 +154,7 @@ fn state_matrix(
     tangent: &Tangent,
     spectrum: &Spectrum,
 ) -> (DMatrix<f64>, DVector<f64>, Vec<ModeKind>) {
-    let phi = DMatrix::from_columns(
-        &spectrum
-            .modes
-            .iter()
-            .map(|m| m.reduced.clone())
-            .collect::<Vec<_>>(),
-    );
+    let phi = spectrum.shapes();
     let matrices = ModalMatrices::new(tangent, &phi);
     let kinds = spectrum.modes.iter().map(|m| m.kind).collect();
     (matrices.state_matrix(), matrices.mass.diagonal(), kinds)

@@ -62,13 +62,7 @@ fn check_linear_model(sim: &Simulation) -> LinearModel {
     let n = y0.len() / 2;
     let (q0, v0) = y0.split_at(n);
     let spectrum = Spectrum::new(model, &sim.inputs, sim.time(), q0);
-    let phi = DMatrix::from_columns(
-        &spectrum
-            .modes
-            .iter()
-            .map(|m| m.reduced.clone())
-            .collect::<Vec<_>>(),
-    );
+    let phi = spectrum.shapes();
     let (m, nu) = (phi.ncols(), chans.len());
     assert_eq!(lin.a.shape(), (2 * m, 2 * m));
     assert_eq!(lin.b.shape(), (2 * m, nu));

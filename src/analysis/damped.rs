@@ -88,13 +88,7 @@ pub fn damping(tangent: &Tangent, spectrum: &Spectrum) -> Vec<Damping> {
     if spectrum.modes.is_empty() {
         return Vec::new();
     }
-    let phi = DMatrix::from_columns(
-        &spectrum
-            .modes
-            .iter()
-            .map(|m| m.reduced.clone())
-            .collect::<Vec<_>>(),
-    );
+    let phi = spectrum.shapes();
     let matrices = ModalMatrices::new(tangent, &phi);
     let kinds: Vec<ModeKind> = spectrum.modes.iter().map(|m| m.kind).collect();
     if matrices.damping.iter().all(|&c| c == 0.0) {

@@ -59,13 +59,7 @@ pub fn linearize(
     let q = &y0[..n];
     let tangent = Tangent::new(model, inputs, t, q, &vec![0.0; n]);
     let spectrum = Spectrum::of(model, &tangent);
-    let phi = DMatrix::from_columns(
-        &spectrum
-            .modes
-            .iter()
-            .map(|m| m.reduced.clone())
-            .collect::<Vec<_>>(),
-    );
+    let phi = spectrum.shapes();
     let m = phi.ncols();
     let kinds: Vec<InputChannel> = channels.iter().map(|(_, c)| *c).collect();
     let matrices = ModalMatrices::new(&tangent, &phi);

@@ -84,6 +84,17 @@ pub struct Spectrum {
 }
 
 impl Spectrum {
+    /// The mode shapes (in the constrained coordinates) as the columns of one matrix, Φ.
+    pub fn shapes(&self) -> DMatrix<f64> {
+        DMatrix::from_columns(
+            &self
+                .modes
+                .iter()
+                .map(|m| m.reduced.clone())
+                .collect::<Vec<_>>(),
+        )
+    }
+
     /// The modes of `model` about positions `q` at rest with `inputs`, at time `t`.
     pub fn new(model: &Model, inputs: &Inputs, t: f64, q: &[f64]) -> Self {
         let tangent = Tangent::new(model, inputs, t, q, &vec![0.0; q.len()]);
