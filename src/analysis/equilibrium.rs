@@ -4,9 +4,10 @@
 //! the paper's correction. The equilibrium must be stable: `Zᵀ K Z` positive definite
 //! apart from the rigid-body motions of an unpinned structure.
 
-use nalgebra::{DVector, SymmetricEigen, Vector3};
+use nalgebra::{DVector, Vector3};
 
 use super::modes::{ModeKind, Spectrum};
+use super::reduced::symmetric_eigen;
 use super::{Reduced, Tangent};
 use crate::dynamics::{self, Inputs, Workspace};
 use crate::error::SceneError;
@@ -125,7 +126,7 @@ pub fn solve(model: &Model, inputs: &Inputs) -> Result<Settled, SceneError> {
 /// is left, not approached. A force along a zero-stiffness direction cannot be balanced:
 /// its size comes back as the error.
 fn newton_step(reduced: &Reduced, r: &DVector<f64>, scale: f64) -> Result<DVector<f64>, f64> {
-    let eigen = SymmetricEigen::new(reduced.stiffness.clone());
+    let eigen = symmetric_eigen(reduced.stiffness.clone());
     let largest = eigen.eigenvalues.amax().max(f64::MIN_POSITIVE);
     let mut step = DVector::zeros(r.len());
     for k in 0..r.len() {

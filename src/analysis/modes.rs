@@ -6,8 +6,9 @@
 
 use std::f64::consts::PI;
 
-use nalgebra::{DMatrix, DVector, SymmetricEigen, Vector3};
+use nalgebra::{DMatrix, DVector, Vector3};
 
+use super::reduced::symmetric_eigen;
 use super::{Reduced, Tangent};
 use crate::dynamics::Inputs;
 use crate::model::Model;
@@ -125,7 +126,7 @@ impl Spectrum {
         // out first, the rest is an ordinary symmetric eigenproblem on their complement.
         let rigid = zero_stiffness_rigid_motions(model, tangent, &reduced, &l, &a, scale);
         let complement = orthogonal_complement(&rigid, m);
-        let eigen = SymmetricEigen::new(complement.tr_mul(&(&a * &complement)));
+        let eigen = symmetric_eigen(complement.tr_mul(&(&a * &complement)));
         let largest = eigen.eigenvalues.amax().max(f64::MIN_POSITIVE);
         let mut others: Vec<(f64, DVector<f64>)> = (0..complement.ncols())
             .map(|k| {
@@ -235,7 +236,7 @@ fn zero_stiffness_rigid_motions(
     if basis.ncols() == 0 {
         return basis;
     }
-    let within = SymmetricEigen::new(basis.tr_mul(&(a * &basis)));
+    let within = symmetric_eigen(basis.tr_mul(&(a * &basis)));
     let free: Vec<DVector<f64>> = (0..basis.ncols())
         .filter(|&k| within.eigenvalues[k].abs() <= RIGID_STIFFNESS * scale)
         .map(|k| &basis * within.eigenvectors.column(k))
@@ -267,7 +268,7 @@ fn allowed_rigid_motions(model: &Model, tangent: &Tangent) -> DMatrix<f64> {
         rows.view_mut((3 * k, 3), (3, 3)).copy_from(&skew);
     }
     let size = rows.amax().max(1.0);
-    let eigen = SymmetricEigen::new(rows.tr_mul(&rows));
+    let eigen = symmetric_eigen(rows.tr_mul(&rows));
     let keep: Vec<DVector<f64>> = (0..6)
         .filter(|&k| eigen.eigenvalues[k] <= 1e-12 * size * size)
         .map(|k| eigen.eigenvectors.column(k).into_owned())
@@ -294,7 +295,7 @@ fn orthogonal_complement(r: &DMatrix<f64>, m: usize) -> DMatrix<f64> {
         return DMatrix::identity(m, m);
     }
     let projector = DMatrix::identity(m, m) - r * r.transpose();
-    let eigen = SymmetricEigen::new(projector);
+    let eigen = symmetric_eigen(projector);
     let keep: Vec<DVector<f64>> = (0..m)
         .filter(|&k| eigen.eigenvalues[k] > 0.5)
         .map(|k| eigen.eigenvectors.column(k).into_owned())

@@ -1,6 +1,6 @@
 //! The dynamics restricted to the tangent space of the bar constraints at a state.
 
-use nalgebra::{DMatrix, SymmetricEigen};
+use nalgebra::{DMatrix, DVector, Dyn, SymmetricEigen};
 
 use super::Tangent;
 
@@ -43,10 +43,23 @@ pub fn null_basis(g: &DMatrix<f64>, n: usize) -> DMatrix<f64> {
     if g.nrows() == 0 {
         return DMatrix::identity(n, n);
     }
-    let eigen = SymmetricEigen::new(g.tr_mul(g));
+    let eigen = symmetric_eigen(g.tr_mul(g));
     let largest = eigen.eigenvalues.amax();
     let keep: Vec<usize> = (0..n)
         .filter(|&k| eigen.eigenvalues[k] <= 1e-12 * largest)
         .collect();
     DMatrix::from_fn(n, keep.len(), |r, c| eigen.eigenvectors[(r, keep[c])])
+}
+
+/// The eigen-decomposition of a symmetric matrix; a 0 × 0 one (a structure with nothing
+/// free to move, or nothing left after the rigid motions) has no eigenpairs, where
+/// nalgebra would panic.
+pub fn symmetric_eigen(a: DMatrix<f64>) -> SymmetricEigen<f64, Dyn> {
+    if a.is_empty() {
+        return SymmetricEigen {
+            eigenvectors: a,
+            eigenvalues: DVector::zeros(0),
+        };
+    }
+    SymmetricEigen::new(a)
 }
