@@ -5,6 +5,10 @@ use crate::error::SceneError;
 
 /// Lengths below this fraction of the structure's size count as zero.
 const ZERO_LENGTH_FRACTION: f64 = 1e-9;
+/// Largest magnitude of any number in a scene: far beyond physical values in SI units,
+/// and small enough that the products the dynamics form (stiffness × length², load ×
+/// length / mass) cannot overflow to ∞ or NaN.
+const MAX_MAGNITUDE: f64 = 1e30;
 
 pub(super) fn validate(scene: &Scene) -> Result<(), SceneError> {
     let n = scene.nodes.len();
@@ -346,23 +350,35 @@ fn size_of(scene: &Scene) -> f64 {
 }
 
 fn finite(key: &str, v: f64) -> Result<(), SceneError> {
-    if v.is_finite() {
-        Ok(())
-    } else {
-        Err(SceneError::invalid(
+    if !v.is_finite() {
+        return Err(SceneError::invalid(
             key,
             format!("must be a finite number, got {v}"),
-        ))
+        ));
     }
+    within_magnitude(key, v)
 }
 
 fn finite_vec(key: &str, v: &[f64; 3]) -> Result<(), SceneError> {
-    if v.iter().all(|x| x.is_finite()) {
-        Ok(())
-    } else {
-        Err(SceneError::invalid(
+    if !v.iter().all(|x| x.is_finite()) {
+        return Err(SceneError::invalid(
             key,
             format!("must hold finite numbers, got {v:?}"),
-        ))
+        ));
     }
+    v.iter().try_for_each(|&x| within_magnitude(key, x))
+}
+
+fn within_magnitude(key: &str, v: f64) -> Result<(), SceneError> {
+    if v.abs() <= MAX_MAGNITUDE {
+        return Ok(());
+    }
+    Err(SceneError::invalid(
+        key,
+        format!(
+            "{v:e} is beyond ±{MAX_MAGNITUDE:e}, the largest magnitude a scene number may have \
+             (the forces and energies computed from it would overflow); express the scene in \
+             other units, or use a smaller value"
+        ),
+    ))
 }
