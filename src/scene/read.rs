@@ -60,6 +60,8 @@ impl Scene {
 const MAX_MESSAGE: usize = 300;
 /// Longest quoted scene line in an error, in characters.
 const MAX_SNIPPET: usize = 80;
+/// Longest key in an error, in characters (an unknown key can be a whole line of text).
+const MAX_KEY: usize = 80;
 
 /// A serde path with 1-based list indices: `bars[2].mass`.
 fn key_path(path: &serde_path_to_error::Path) -> String {
@@ -84,7 +86,7 @@ fn with_key(key: &str, message: &str) -> String {
     if key.is_empty() {
         message.to_string()
     } else {
-        format!("{key}: {message}")
+        format!("{}: {message}", cut(key, MAX_KEY))
     }
 }
 
