@@ -12,6 +12,10 @@ const TIME_EPS: f64 = 1e-12;
 
 /// The spacing of doubles at the current time may be at most this fraction of a step.
 const TIME_RESOLUTION: f64 = 1e-6;
+/// Largest reduced position or velocity component a step may leave: far past anything the
+/// scene limits allow, a state beyond it has blown up, and the forces computed from it
+/// (squared speeds over lengths) would overflow while the state itself stays finite.
+const MAX_STATE: f64 = 1e100;
 
 impl Simulation {
     /// Takes `n` steps of `h` from the current time; time is `t₀ + k h`, not a running sum.
@@ -238,14 +242,16 @@ impl Simulation {
             self.correct();
             self.integrator.after_correction();
         }
-        if let Some(i) = self.state.y.iter().position(|x| !x.is_finite()) {
+        if let Some(i) = self.state.y.iter().position(|x| !(x.abs() <= MAX_STATE)) {
+            let value = self.state.y[i];
             self.restore_last_good();
             let half = self.state.y.len() / 2;
             let what = if i < half { "position" } else { "velocity" };
-            return Err(StepError::NonFinite {
-                time: t,
-                what: format!("reduced {what} component {}", i % half + 1),
-            });
+            let mut what = format!("reduced {what} component {}", i % half + 1);
+            if value.is_finite() {
+                what += &format!(" = {value:e}, past ±{MAX_STATE:e}, where its forces overflow");
+            }
+            return Err(StepError::NonFinite { time: t, what });
         }
         if !self.correction {
             if let Err(e) = self.check_drift(t) {
