@@ -82,12 +82,23 @@ fn key_path(path: &serde_path_to_error::Path) -> String {
     key
 }
 
+/// `key: message` on one line: a key may hold any character, line breaks included, and
+/// the parser's message quotes it.
 fn with_key(key: &str, message: &str) -> String {
-    if key.is_empty() {
+    let text = if key.is_empty() {
         message.to_string()
     } else {
         format!("{}: {message}", cut(key, MAX_KEY))
-    }
+    };
+    text.chars()
+        .map(|c| {
+            if c.is_control() {
+                c.escape_default().to_string()
+            } else {
+                c.to_string()
+            }
+        })
+        .collect()
 }
 
 /// `key: message (line L, column C: `the line`)`, the line cut around the column.
