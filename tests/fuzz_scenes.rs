@@ -129,3 +129,69 @@ fn an_unknown_key_as_long_as_the_file_is_cut_in_the_message() {
     );
     assert_eq!(run(&text, true), Ok(Outcome::Refused));
 }
+
+#[test]
+fn a_state_that_blows_up_stops_before_its_forces_overflow() {
+    // A bar spinning at 1e15 m/s under rk4 at 0.1 ms (h·ω ≈ 1e11) grows its speed by many
+    // orders of magnitude per step: the state stayed finite while the bar force, m v²/L,
+    // overflowed to -∞. The speed is set on the state, past what a scene may start with.
+    let text = r#"name = "spun"
+nodes = [[0.0, 0.0, 0.9210475351814649], [0.8535097982834869, 0.0, 0.0], [0.0, 0.0, 0.9210475351814649]]
+fixed = [3]
+velocities = [[1e8, -0.144728004956339e-7, 0.0], [0.0, 0.0, 0.0], [0.0, 0.0, 0.0]]
+
+[[bars]]
+nodes = [1, 2]
+mass = 1.8859505750897774
+
+[[point_masses]]
+node = 2
+mass = 0.1
+
+[[cables]]
+nodes = [3, 2]
+rest_length = 0.05
+stiffness = 10.0
+
+[solver]
+method = "rk4"
+step_size = 1e-4
+locate_events = false
+"#;
+    let model = analysis::load(&Scene::from_toml_str(text).unwrap()).unwrap();
+    let mut sim = tensegrity_fmu::Simulation::new(model);
+    let mut state = sim.state().clone();
+    let half = state.y.len() / 2;
+    state.y[half..].iter_mut().for_each(|v| *v *= 1e7);
+    sim.set_state(state);
+    let stop = (1..=40)
+        .find_map(|k| sim.advance_to(f64::from(k) * 1e-4).err())
+        .expect("the run stops");
+    assert!(stop.to_string().contains("past ±1e100"), "{stop}");
+    sim.refresh();
+    let speed = sim.node_velocity(0).norm();
+    assert!(speed > 1e14 && speed <= 1e100, "{speed}");
+    assert!(sim.bar_force(0).is_finite() && sim.energy().is_finite());
+}
+
+#[test]
+fn a_key_with_a_line_break_is_quoted_on_one_line() {
+    // A byte flip made `"stiffness"` the JSON string "stif\ness"; the unknown-key error
+    // quoted its line break raw, twice.
+    let json = r#"{"name": "x", "nodes": [[0, 0, 0], [1, 0, 0]], "bars": [{"nodes": [1, 2], "mass": 1}], "cables": [{"nodes": [1, 2], "stif\ness": 5.0}]}"#;
+    let message = Scene::from_json_str(json).unwrap_err().to_string();
+    assert!(
+        message
+            .starts_with("malformed JSON scene: cables[1].stif\\ness: unknown field `stif\\ness`"),
+        "{message}"
+    );
+    assert!(!message.contains('\n'));
+    // The same in TOML, with a quoted key.
+    let toml = "name = \"x\"\n\"a\\tb\\r\" = 1\n";
+    let message = Scene::from_toml_str(toml).unwrap_err().to_string();
+    assert!(
+        message.starts_with("malformed TOML scene: a\\tb\\r: unknown field"),
+        "{message}"
+    );
+    assert!(!message.contains(['\t', '\r']), "{message}");
+}

@@ -75,7 +75,10 @@ fn free_node(n: usize) -> impl Strategy<Value = Value> {
 fn pair(n: usize) -> impl Strategy<Value = Value> {
     (0..n, 1..n).prop_map(move |(a, d)| {
         let b = (a + d) % n;
-        Value::Array(vec![Value::Integer(a as i64 + 1), Value::Integer(b as i64 + 1)])
+        Value::Array(vec![
+            Value::Integer(a as i64 + 1),
+            Value::Integer(b as i64 + 1),
+        ])
     })
 }
 
@@ -121,26 +124,20 @@ fn cable(n: usize) -> impl Strategy<Value = (Value, u8, bool)> {
 }
 
 fn load(n: usize) -> impl Strategy<Value = Value> {
-    (
-        free_node(n),
-        0u8..3,
-        vec3(-10.0..10.0f64),
-        magnitude(),
-    )
-        .prop_map(|(node, kind, force, x)| {
-            let (name, key) = match kind {
-                0 => ("constant", "force"),
-                1 => ("sinusoidal", "amplitude"),
-                _ => ("step", "force"),
-            };
-            table(vec![
-                ("kind", Some(Value::String(name.into()))),
-                ("node", Some(node)),
-                (key, Some(force)),
-                ("frequency", (kind == 1).then_some(float(x))),
-                ("time", (kind == 2).then_some(float(0.001 * x))),
-            ])
-        })
+    (free_node(n), 0u8..3, vec3(-10.0..10.0f64), magnitude()).prop_map(|(node, kind, force, x)| {
+        let (name, key) = match kind {
+            0 => ("constant", "force"),
+            1 => ("sinusoidal", "amplitude"),
+            _ => ("step", "force"),
+        };
+        table(vec![
+            ("kind", Some(Value::String(name.into()))),
+            ("node", Some(node)),
+            (key, Some(force)),
+            ("frequency", (kind == 1).then_some(float(x))),
+            ("time", (kind == 2).then_some(float(0.001 * x))),
+        ])
+    })
 }
 
 fn ground() -> impl Strategy<Value = Value> {
@@ -230,7 +227,10 @@ pub fn structured() -> impl Strategy<Value = Input> {
             vec(magnitude(), n / 2),
             vec(cable(n), 0..=2 * n),
             prop::bool::weighted(0.3),
-            proptest::sample::subsequence((2..=(n - n % 2) as i64).collect::<Vec<_>>(), 0..=(n / 2).min(2)),
+            proptest::sample::subsequence(
+                (2..=(n - n % 2) as i64).collect::<Vec<_>>(),
+                0..=(n / 2).min(2),
+            ),
             option::weighted(0.5, vec3(-10.0..10.0f64)),
         );
         let more = (
@@ -286,9 +286,11 @@ fn assemble(n: usize, parts: Parts, more: More) -> Input {
             ])
         })
         .collect();
-    bars.extend(joints.into_iter().map(|(nodes, m)| {
-        table(vec![("nodes", Some(nodes)), ("mass", Some(float(m)))])
-    }));
+    bars.extend(
+        joints
+            .into_iter()
+            .map(|(nodes, m)| table(vec![("nodes", Some(nodes)), ("mass", Some(float(m)))])),
+    );
     let mut pinned = Vec::new();
     if pin_first {
         pinned.push(Value::Integer(1));
@@ -303,7 +305,11 @@ fn assemble(n: usize, parts: Parts, more: More) -> Input {
         .map(|(mut c, kind, derived)| {
             if prestressed && derived {
                 let t = c.as_table_mut().expect("a table");
-                t.remove(if kind == 1 { "force_density" } else { "rest_length" });
+                t.remove(if kind == 1 {
+                    "force_density"
+                } else {
+                    "rest_length"
+                });
             }
             c
         })
@@ -482,10 +488,30 @@ enum Mutation {
 
 /// Tokens that mean something to TOML, JSON or a scene.
 const TOKENS: [&str; 24] = [
-    "nan", "-inf", "inf", "-1", "0", "1e308", "-0.0", "1e-320", "9223372036854775807", "[", "]",
-    "{", "}", "\"", "=", ",", "\n", "\n[[bars]]\nnodes = [1, 1]\nmass = 1.0\n", "\n[solver]\n",
-    "\n[[cables]]\nnodes = [1, 2]\nstiffness = 1e14\nrest_length = 0.1\n", "\u{0}", "é",
-    "\"equilibrium\"", "null",
+    "nan",
+    "-inf",
+    "inf",
+    "-1",
+    "0",
+    "1e308",
+    "-0.0",
+    "1e-320",
+    "9223372036854775807",
+    "[",
+    "]",
+    "{",
+    "}",
+    "\"",
+    "=",
+    ",",
+    "\n",
+    "\n[[bars]]\nnodes = [1, 1]\nmass = 1.0\n",
+    "\n[solver]\n",
+    "\n[[cables]]\nnodes = [1, 2]\nstiffness = 1e14\nrest_length = 0.1\n",
+    "\u{0}",
+    "é",
+    "\"equilibrium\"",
+    "null",
 ];
 
 fn mutation() -> impl Strategy<Value = Mutation> {

@@ -115,9 +115,7 @@ fn refused(e: &SceneError) -> Result<Outcome, String> {
         SceneError::Io { .. } => false,
     };
     if !named {
-        return Err(format!(
-            "the scene error names no key (nor line): {text}"
-        ));
+        return Err(format!("the scene error names no key (nor line): {text}"));
     }
     Ok(Outcome::Refused)
 }
