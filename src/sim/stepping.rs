@@ -242,7 +242,12 @@ impl Simulation {
             self.correct();
             self.integrator.after_correction();
         }
-        if let Some(i) = self.state.y.iter().position(|x| !(x.abs() <= MAX_STATE)) {
+        if let Some(i) = self
+            .state
+            .y
+            .iter()
+            .position(|x| x.is_nan() || x.abs() > MAX_STATE)
+        {
             let value = self.state.y[i];
             self.restore_last_good();
             let half = self.state.y.len() / 2;
