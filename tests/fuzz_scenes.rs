@@ -139,24 +139,10 @@ fn a_state_that_blows_up_stops_before_its_forces_overflow() {
 nodes = [[0.0, 0.0, 0.9210475351814649], [0.8535097982834869, 0.0, 0.0], [0.0, 0.0, 0.9210475351814649]]
 fixed = [3]
 velocities = [[1e8, -0.144728004956339e-7, 0.0], [0.0, 0.0, 0.0], [0.0, 0.0, 0.0]]
-
-[[bars]]
-nodes = [1, 2]
-mass = 1.8859505750897774
-
-[[point_masses]]
-node = 2
-mass = 0.1
-
-[[cables]]
-nodes = [3, 2]
-rest_length = 0.05
-stiffness = 10.0
-
-[solver]
-method = "rk4"
-step_size = 1e-4
-locate_events = false
+bars = [{ nodes = [1, 2], mass = 1.8859505750897774 }]
+point_masses = [{ node = 2, mass = 0.1 }]
+cables = [{ nodes = [3, 2], rest_length = 0.05, stiffness = 10.0 }]
+solver = { method = "rk4", step_size = 1e-4, locate_events = false }
 "#;
     let model = analysis::load(&Scene::from_toml_str(text).unwrap()).unwrap();
     let mut sim = tensegrity_fmu::Simulation::new(model);
