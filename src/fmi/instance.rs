@@ -59,7 +59,7 @@ pub struct Instance {
 }
 
 /// Tolerance for matching a communication point with the current time.
-fn time_tolerance(t: f64) -> f64 {
+pub(super) fn time_tolerance(t: f64) -> f64 {
     1e-9 * t.abs().max(1.0)
 }
 
@@ -398,13 +398,21 @@ impl Instance {
         )?;
         snapshot
             .restore(&self.guid, &mut self.core)
-            .map_err(|e| FmiError::refused(format!("fmi2SetFMUstate: {e}")))?;
+            .map_err(|e| FmiError::refused(format!("fmi2SetFMUstate: {e}; nothing was changed")))?;
         Ok(Status::Ok)
     }
 
-    /// `fmi2DeSerializeFMUstate`.
+    /// `fmi2DeSerializeFMUstate`: the buffer is parsed, then every field is checked
+    /// against this instance's model.
     pub fn deserialize_state(&self, bytes: &[u8]) -> FmiResult<Snapshot> {
-        Snapshot::from_bytes(&self.guid, bytes)
-            .map_err(|e| FmiError::refused(format!("fmi2DeSerializeFMUstate: {e}")))
+        let refused = |e: String| {
+            FmiError::refused(format!(
+                "fmi2DeSerializeFMUstate: {e}; nothing was changed. Pass a buffer that \
+                 fmi2SerializeFMUstate wrote for this FMU, unchanged"
+            ))
+        };
+        let snapshot = Snapshot::from_bytes(&self.guid, bytes).map_err(refused)?;
+        snapshot.check(&self.core).map_err(refused)?;
+        Ok(snapshot)
     }
 }
