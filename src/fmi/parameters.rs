@@ -4,6 +4,7 @@
 
 use super::variables::{BaseType, Binding, GroundField, LoadField, Variable};
 use crate::integrator::Method;
+use crate::numbers::shortest;
 use crate::scene::{GroundSpec, LoadSpec, Scene};
 
 /// The scene value behind a parameter binding (0 for a non-parameter binding).
@@ -64,7 +65,7 @@ pub(super) fn refused_value(parameter: &Variable, value: f64) -> Option<String> 
     } else {
         return None;
     };
-    Some(format!("{name} = {value} {why}"))
+    Some(format!("{name} = {} {why}", shortest(value)))
 }
 
 pub(super) fn apply_parameter(scene: &mut Scene, binding: Binding, value: f64) {

@@ -6,6 +6,7 @@
 
 use super::Scene;
 use crate::error::SceneError;
+use crate::numbers::shortest;
 
 /// Longest `name`, in characters: it names the FMU file and its folder when unzipped,
 /// and file systems allow 255 bytes.
@@ -46,8 +47,8 @@ fn check_bound(
     let Some(axis) = x.iter().position(|c| !(c.abs() <= bound)) else {
         return Ok(());
     };
-    let (name, c) = (["x", "y", "z"][axis], x[axis]);
-    let reason = if c.is_finite() {
+    let (name, c) = (["x", "y", "z"][axis], shortest(x[axis]));
+    let reason = if x[axis].is_finite() {
         format!("{name} = {c} {unit} is outside ±{bound:e} {unit}, the range of node {what}")
     } else {
         format!("{name} = {c} is not a finite number")

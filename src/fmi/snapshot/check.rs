@@ -10,6 +10,7 @@ use crate::fmi::instance::time_tolerance;
 use crate::fmi::parameters::{apply_parameter, refused_value};
 use crate::fmi::state::Core;
 use crate::fmi::Mode;
+use crate::numbers::shortest;
 use crate::scene::{limits, Scene};
 
 /// How many times [`HELD_TO`] of the coordinates' magnitude a corrected bar length may be
@@ -89,8 +90,9 @@ impl Snapshot {
         if let Some(stop) = self.stop_time {
             if self.time > stop + time_tolerance(stop) {
                 return Err(format!(
-                    "time = {} s is past its stop time {stop} s (allowed: time ≤ stop time)",
-                    self.time
+                    "time = {} s is past its stop time {} s (allowed: time ≤ stop time)",
+                    shortest(self.time),
+                    shortest(stop)
                 ));
             }
         }
@@ -117,7 +119,7 @@ impl Snapshot {
         if self.h_next <= 0.0 {
             return Err(format!(
                 "the adaptive method's next step = {} s is not positive (allowed: > 0)",
-                self.h_next
+                shortest(self.h_next)
             ));
         }
         let s = &scene.solver;
@@ -168,10 +170,11 @@ impl Snapshot {
             let error = (length - bar.length).abs();
             if !(error <= allowed) {
                 return Err(format!(
-                    "bar[{}] is {length} m long, but the model's bar is {} m (allowed error \
-                     {allowed:e} m with solver.correction = {})",
+                    "bar[{}] is {} m long, but the model's bar is {} m (allowed error \
+                     {allowed:.1e} m with solver.correction = {})",
                     i + 1,
-                    bar.length,
+                    shortest(length),
+                    shortest(bar.length),
                     u8::from(correction)
                 ));
             }
@@ -180,8 +183,8 @@ impl Snapshot {
                 let allowed = ROUNDING_SLACK * HELD_TO * length * (va.norm() + vb.norm());
                 if !(along <= allowed) {
                     return Err(format!(
-                        "bar[{}]'s ends separate at {:e} m/s, but a rigid bar's length does \
-                         not change (allowed {:e} m/s with solver.correction = 1)",
+                        "bar[{}]'s ends separate at {:.3e} m/s, but a rigid bar's length does \
+                         not change (allowed {:.1e} m/s with solver.correction = 1)",
                         i + 1,
                         along / length,
                         allowed / length
