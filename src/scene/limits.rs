@@ -44,7 +44,7 @@ fn check_bound(
     unit: &str,
     what: &str,
 ) -> Result<(), SceneError> {
-    let Some(axis) = x.iter().position(|c| !(c.abs() <= bound)) else {
+    let Some(axis) = x.iter().position(|c| c.is_nan() || c.abs() > bound) else {
         return Ok(());
     };
     let (name, c) = (["x", "y", "z"][axis], shortest(x[axis]));

@@ -158,6 +158,7 @@ impl Snapshot {
                 })
                 .map_err(|e| e.to_string())?;
         }
+        // Every end is finite and within the limits from here on: no NaN below.
         let correction = scene.solver.correction;
         for (i, bar) in model.bars.iter().enumerate() {
             let ((a, va), (b, vb)) = (end(2 * i), end(2 * i + 1));
@@ -168,7 +169,7 @@ impl Snapshot {
                 MAX_UNCORRECTED_DRIFT * bar.length
             };
             let error = (length - bar.length).abs();
-            if !(error <= allowed) {
+            if error > allowed {
                 return Err(format!(
                     "bar[{}] is {} m long, but the model's bar is {} m (allowed error \
                      {allowed:.1e} m with solver.correction = {})",
@@ -181,7 +182,7 @@ impl Snapshot {
             if correction {
                 let along = (b - a).dot(&(vb - va)).abs();
                 let allowed = ROUNDING_SLACK * HELD_TO * length * (va.norm() + vb.norm());
-                if !(along <= allowed) {
+                if along > allowed {
                     return Err(format!(
                         "bar[{}]'s ends separate at {:.3e} m/s, but a rigid bar's length does \
                          not change (allowed {:.1e} m/s with solver.correction = 1)",
