@@ -384,7 +384,8 @@ impl Instance {
         Ok(Snapshot::take(&self.guid, &self.core))
     }
 
-    /// `fmi2SetFMUstate` (also legal after an error, to recover).
+    /// `fmi2SetFMUstate` (also legal after an error, to recover): the state is checked
+    /// against the model first, as a state handed in may not come from this instance.
     pub fn set_state(&mut self, snapshot: &Snapshot) -> FmiResult {
         self.require(
             "fmi2SetFMUstate",

@@ -132,7 +132,9 @@ impl Snapshot {
         out
     }
 
-    /// Parses a serialized state, checking magic, version and GUID.
+    /// Parses a serialized state, checking magic, version, GUID, checksum, flags and that
+    /// every number is finite; the checks against the model follow in
+    /// [`super::Instance::deserialize_state`] and [`super::Instance::set_state`].
     pub fn from_bytes(guid: &str, bytes: &[u8]) -> Result<Self, String> {
         let body_len = bytes
             .len()
