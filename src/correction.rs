@@ -7,6 +7,12 @@ use nalgebra::Vector3;
 use crate::model::coords::Coordinates;
 pub use crate::model::correction_plan::CorrectionPlan;
 
+/// Relative residual at which the iterative projection stops: round-off. Bar lengths hold
+/// to it after every step, apart from the rounding of the end positions themselves.
+pub const HELD_TO: f64 = 16.0 * f64::EPSILON;
+/// Without the correction, a run stops once a bar's length drifts by this fraction.
+pub const MAX_UNCORRECTED_DRIFT: f64 = 0.01;
+
 /// Sweeps of the iterative projection before giving up (it converges linearly from
 /// round-off-sized residuals, in a handful of sweeps).
 const LOOP_SWEEPS: usize = 100;
@@ -59,7 +65,7 @@ impl CorrectionPlan {
                 worst = worst.max((b.norm() - l).abs() / l);
                 apply(pattern, &(b * (l / b.norm()) - b), q);
             }
-            if worst <= 16.0 * f64::EPSILON {
+            if worst <= HELD_TO {
                 return;
             }
         }
@@ -79,7 +85,7 @@ impl CorrectionPlan {
                 worst = worst.max(dot.abs() / (b.norm() * bdot.norm()).max(f64::MIN_POSITIVE));
                 apply(pattern, &(-b * (dot / b.norm_squared())), v);
             }
-            if worst <= 16.0 * f64::EPSILON {
+            if worst <= HELD_TO {
                 return;
             }
         }

@@ -12,6 +12,11 @@ pub fn write_number(w: &mut impl Write, x: f64) -> std::io::Result<()> {
     w.write_all(number(&mut zmij::Buffer::new(), x).as_bytes())
 }
 
+/// The text of [`write_number`], for a message.
+pub fn shortest(x: f64) -> String {
+    number(&mut zmij::Buffer::new(), x).to_string()
+}
+
 /// The text of [`write_number`], formatted in `digits`.
 pub fn number(digits: &mut zmij::Buffer, x: f64) -> &str {
     if x == 0.0 {

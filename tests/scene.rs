@@ -244,6 +244,33 @@ fn velocities_of_wrong_length() {
 }
 
 #[test]
+fn positions_and_velocities_beyond_the_limits() {
+    // The scene's limits, which restored FMU states are held to as well.
+    let mut s = base();
+    s.nodes[3][2] = 2e9;
+    rejects(
+        &s,
+        "nodes[4]",
+        "z = 2000000000 m is outside ±1e9 m, the range of node coordinates",
+    );
+    // The whole structure moved to the limit.
+    for p in &mut s.nodes {
+        p[2] = -1e9;
+    }
+    Model::new(&s).expect("on the limit is within it");
+    let mut s = base_with(
+        "velocities = [[0.0, 0.0, 0.0], [0.0, 0.0, 0.0], [0.0, 0.0, 0.0], [0.0, 3e8, 0.0]]",
+    );
+    rejects(
+        &s,
+        "velocities[4]",
+        "y = 300000000 m/s is outside ±2.99792458e8 m/s, the range of node velocity components",
+    );
+    s.velocities.as_mut().unwrap()[3][1] = 2.9e8;
+    s.validate().expect("slower than light");
+}
+
+#[test]
 fn non_positive_step_size() {
     let mut s = base();
     s.solver.step_size = 0.0;

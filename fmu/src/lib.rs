@@ -115,41 +115,46 @@ pub unsafe extern "C" fn fmi2Instantiate(
     if functions.logger.is_none() {
         return ptr::null_mut();
     }
-    let name = text(instanceName).unwrap_or_default();
-    let report = |message: &str| {
-        ffi::log(
-            functions,
-            &name,
-            fmi2Status_fmi2Error,
-            Category::Error,
-            message,
-        )
-    };
-    let built = guard::quietly(|| {
-        if fmuType != fmi2Type_fmi2CoSimulation {
-            return Err("fmi2Instantiate: this FMU supports co-simulation only".to_string());
+    // Everything past the checks above runs inside the guard, logging included.
+    guard::quietly(AssertUnwindSafe(|| {
+        let name = text(instanceName).unwrap_or_default();
+        let report = |message: &str| {
+            ffi::log(
+                functions,
+                &name,
+                fmi2Status_fmi2Error,
+                Category::Error,
+                message,
+            )
+        };
+        let built = guard::quietly(|| {
+            if fmuType != fmi2Type_fmi2CoSimulation {
+                return Err("fmi2Instantiate: this FMU supports co-simulation only".to_string());
+            }
+            let guid = text(fmuGUID).ok_or("fmi2Instantiate: fmuGUID is missing")?;
+            let location = text(fmuResourceLocation)
+                .ok_or("fmi2Instantiate: fmuResourceLocation is missing")?;
+            let resources =
+                resource_path(&location).map_err(|e| format!("fmi2Instantiate: {e}"))?;
+            Instance::instantiate(&name, &guid, &resources, loggingOn != 0)
+        });
+        match built {
+            Ok(Ok(instance)) => {
+                let mut component = Box::new(Component::new(instance, functions));
+                component.flush_log();
+                Box::into_raw(component) as fmi2Component
+            }
+            Ok(Err(message)) => {
+                report(&message);
+                ptr::null_mut()
+            }
+            Err(panic) => {
+                report(&format!("fmi2Instantiate: internal error: {panic}"));
+                ptr::null_mut()
+            }
         }
-        let guid = text(fmuGUID).ok_or("fmi2Instantiate: fmuGUID is missing")?;
-        let location =
-            text(fmuResourceLocation).ok_or("fmi2Instantiate: fmuResourceLocation is missing")?;
-        let resources = resource_path(&location).map_err(|e| format!("fmi2Instantiate: {e}"))?;
-        Instance::instantiate(&name, &guid, &resources, loggingOn != 0)
-    });
-    match built {
-        Ok(Ok(instance)) => {
-            let mut component = Box::new(Component::new(instance, functions));
-            component.flush_log();
-            Box::into_raw(component) as fmi2Component
-        }
-        Ok(Err(message)) => {
-            report(&message);
-            ptr::null_mut()
-        }
-        Err(panic) => {
-            report(&format!("fmi2Instantiate: internal error: {panic}"));
-            ptr::null_mut()
-        }
-    }
+    }))
+    .unwrap_or(ptr::null_mut())
 }
 
 #[no_mangle]
@@ -221,7 +226,8 @@ pub unsafe extern "C" fn fmi2GetDirectionalDerivative(
     unsupported(
         c,
         "fmi2GetDirectionalDerivative",
-        "not provided (providesDirectionalDerivative=false)",
+        "not supported (providesDirectionalDerivative=false); difference the outputs of two \
+         runs, or take the linear model from the CLI's `linearize` command",
     )
 }
 
@@ -236,7 +242,8 @@ pub unsafe extern "C" fn fmi2SetRealInputDerivatives(
     unsupported(
         c,
         "fmi2SetRealInputDerivatives",
-        "inputs are held constant over a step (canInterpolateInputs=false)",
+        "not supported: inputs are held constant over a step (canInterpolateInputs=false); \
+         set the input values with fmi2SetReal before each fmi2DoStep",
     )
 }
 
@@ -251,7 +258,8 @@ pub unsafe extern "C" fn fmi2GetRealOutputDerivatives(
     unsupported(
         c,
         "fmi2GetRealOutputDerivatives",
-        "not provided (maxOutputDerivativeOrder=0)",
+        "not supported (maxOutputDerivativeOrder=0); read the outputs with fmi2GetReal at \
+         each communication point (node velocities are outputs too)",
     )
 }
 
@@ -272,7 +280,9 @@ pub unsafe extern "C" fn fmi2CancelStep(c: fmi2Component) -> fmi2Status {
     unsupported(
         c,
         "fmi2CancelStep",
-        "fmi2DoStep always completes synchronously",
+        "not supported: fmi2DoStep always completes before it returns \
+         (canRunAsynchronuously=false), so there is no step to cancel; use fmi2SetFMUstate \
+         or fmi2Reset to go back",
     )
 }
 
@@ -285,7 +295,8 @@ pub unsafe extern "C" fn fmi2GetStatus(
     unsupported(
         c,
         "fmi2GetStatus",
-        "fmi2DoStep always completes synchronously, so there is no pending status",
+        "not supported: fmi2DoStep always completes before it returns, so no status is \
+         pending; its return value is the status",
     )
 }
 
@@ -318,7 +329,8 @@ pub unsafe extern "C" fn fmi2GetIntegerStatus(
     unsupported(
         c,
         "fmi2GetIntegerStatus",
-        "no integer status is defined for co-simulation",
+        "not supported: FMI 2.0 defines no Integer status; use fmi2GetRealStatus or \
+         fmi2GetBooleanStatus",
     )
 }
 
@@ -351,7 +363,8 @@ pub unsafe extern "C" fn fmi2GetStringStatus(
     unsupported(
         c,
         "fmi2GetStringStatus",
-        "fmi2DoStep always completes synchronously, so there is no pending status",
+        "not supported: fmi2DoStep always completes before it returns, so no status is \
+         pending; its return value is the status",
     )
 }
 

@@ -5,10 +5,9 @@
 use fmi2_model_description::Variability;
 
 use super::instance::{FmiError, FmiResult, Instance};
-use super::parameters::apply_parameter;
+use super::parameters::{apply_parameter, refused_value};
 use super::variables::{BaseType, Binding};
 use super::{Category, Mode, Status};
-use crate::integrator::Method;
 
 impl Instance {
     fn lookup(&self, call: &str, vr: u32, expected: BaseType) -> FmiResult<Binding> {
@@ -182,12 +181,10 @@ impl Instance {
                     next.inputs.rest_length[k] = value;
                 }
                 Binding::NodeForce(k, axis) => next.inputs.node_force[k][axis] = value,
-                Binding::Method if Method::from_fmi_value(value).is_none() => {
-                    return Err(FmiError::refused(format!(
-                        "{call}: {name} = {value} is not a method (1 = rk4, 2 = dopri5, 3 = rattle, 4 = sdirk3)"
-                    )));
-                }
                 _ => {
+                    if let Some(why) = refused_value(variable, value) {
+                        return Err(FmiError::refused(format!("{call}: {why}")));
+                    }
                     apply_parameter(&mut next.scene, binding, value);
                     next.scene.validate().map_err(|e| {
                         FmiError::refused(format!(

@@ -59,7 +59,7 @@ pub struct Instance {
 }
 
 /// Tolerance for matching a communication point with the current time.
-fn time_tolerance(t: f64) -> f64 {
+pub(super) fn time_tolerance(t: f64) -> f64 {
     1e-9 * t.abs().max(1.0)
 }
 
@@ -384,7 +384,8 @@ impl Instance {
         Ok(Snapshot::take(&self.guid, &self.core))
     }
 
-    /// `fmi2SetFMUstate` (also legal after an error, to recover).
+    /// `fmi2SetFMUstate` (also legal after an error, to recover): the state is checked
+    /// against the model first, as a state handed in may not come from this instance.
     pub fn set_state(&mut self, snapshot: &Snapshot) -> FmiResult {
         self.require(
             "fmi2SetFMUstate",
@@ -398,13 +399,21 @@ impl Instance {
         )?;
         snapshot
             .restore(&self.guid, &mut self.core)
-            .map_err(|e| FmiError::refused(format!("fmi2SetFMUstate: {e}")))?;
+            .map_err(|e| FmiError::refused(format!("fmi2SetFMUstate: {e}; nothing was changed")))?;
         Ok(Status::Ok)
     }
 
-    /// `fmi2DeSerializeFMUstate`.
+    /// `fmi2DeSerializeFMUstate`: the buffer is parsed, then every field is checked
+    /// against this instance's model.
     pub fn deserialize_state(&self, bytes: &[u8]) -> FmiResult<Snapshot> {
-        Snapshot::from_bytes(&self.guid, bytes)
-            .map_err(|e| FmiError::refused(format!("fmi2DeSerializeFMUstate: {e}")))
+        let refused = |e: String| {
+            FmiError::refused(format!(
+                "fmi2DeSerializeFMUstate: {e}; nothing was changed. Pass a buffer that \
+                 fmi2SerializeFMUstate wrote for this FMU, unchanged"
+            ))
+        };
+        let snapshot = Snapshot::from_bytes(&self.guid, bytes).map_err(refused)?;
+        snapshot.check(&self.core).map_err(refused)?;
+        Ok(snapshot)
     }
 }

@@ -1,8 +1,10 @@
 //! Parameters live in the scene: these accessors read and write the scene value behind a
-//! parameter binding, so get, set and FMU-state restore share one mapping.
+//! parameter binding, so get, set and FMU-state restore share one mapping, and one check
+//! of a parameter's value.
 
-use super::variables::{Binding, GroundField, LoadField};
+use super::variables::{BaseType, Binding, GroundField, LoadField, Variable};
 use crate::integrator::Method;
+use crate::numbers::shortest;
 use crate::scene::{GroundSpec, LoadSpec, Scene};
 
 /// The scene value behind a parameter binding (0 for a non-parameter binding).
@@ -12,7 +14,8 @@ pub(super) fn read_parameter(scene: &Scene, binding: Binding) -> f64 {
         Binding::Correction => f64::from(u8::from(scene.solver.correction)),
         Binding::LocateEvents => f64::from(u8::from(scene.solver.locate_events)),
         Binding::Method => f64::from(scene.solver.method.fmi_value()),
-        Binding::MaxSteps => scene.solver.max_steps as f64,
+        // As fmi2GetInteger reports it: an FMI Integer is 32 bits.
+        Binding::MaxSteps => scene.solver.max_steps.min(i32::MAX as u64) as f64,
         Binding::Rtol => scene.solver.rtol,
         Binding::Atol => scene.solver.atol,
         Binding::Stiffness(j) => scene.cables[j].stiffness.unwrap_or(0.0),
@@ -34,6 +37,35 @@ pub(super) fn read_parameter(scene: &Scene, binding: Binding) -> f64 {
         | Binding::NodeForce(..)
         | Binding::ReelInput(_) => 0.0,
     }
+}
+
+/// Why fmi2SetReal, fmi2SetInteger or fmi2SetBoolean refuse `value` for `parameter`
+/// before the scene it changes is validated (as it is next), if they do: the one check
+/// of a parameter's value, shared by those calls and restored FMU states.
+pub(super) fn refused_value(parameter: &Variable, value: f64) -> Option<String> {
+    let name = &parameter.name;
+    let why = if !value.is_finite() {
+        "is not a finite number".to_string()
+    } else if parameter.base_type == BaseType::Boolean && value != 0.0 && value != 1.0 {
+        "is not a Boolean (0 or 1)".to_string()
+    } else if parameter.base_type == BaseType::Integer
+        && (value.fract() != 0.0 || value < f64::from(i32::MIN) || value > f64::from(i32::MAX))
+    {
+        format!(
+            "is not an Integer (a whole number from {} to {})",
+            i32::MIN,
+            i32::MAX
+        )
+    } else if parameter.binding == Binding::Method && Method::from_fmi_value(value).is_none() {
+        let methods: Vec<String> = Method::ALL
+            .iter()
+            .map(|m| format!("{} = {}", m.fmi_value(), m.name()))
+            .collect();
+        format!("is not a method ({})", methods.join(", "))
+    } else {
+        return None;
+    };
+    Some(format!("{name} = {} {why}", shortest(value)))
 }
 
 pub(super) fn apply_parameter(scene: &mut Scene, binding: Binding, value: f64) {

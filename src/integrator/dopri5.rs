@@ -141,8 +141,12 @@ impl Integrator for Dopri5 {
         }
     }
 
+    fn carried_len(&self) -> usize {
+        self.k[0].len()
+    }
+
     fn restore_carried(&mut self, values: &[f64]) {
-        self.fresh_k1 = values.len() == self.k[0].len();
+        self.fresh_k1 = values.len() == self.carried_len();
         if self.fresh_k1 {
             self.k[0].copy_from_slice(values);
         }

@@ -82,6 +82,10 @@ pub trait Integrator: Send {
     fn carried(&self) -> Vec<f64> {
         Vec::new()
     }
+    /// The length of [`Integrator::carried`] when it is not empty.
+    fn carried_len(&self) -> usize {
+        0
+    }
     /// Restores what [`Integrator::carried`] returned; a wrong length is ignored (the
     /// values are then recomputed).
     fn restore_carried(&mut self, _values: &[f64]) {}

@@ -106,8 +106,12 @@ impl Integrator for Rattle {
         }
     }
 
+    fn carried_len(&self) -> usize {
+        self.f.len()
+    }
+
     fn restore_carried(&mut self, values: &[f64]) {
-        self.fresh = values.len() == self.f.len();
+        self.fresh = values.len() == self.carried_len();
         if self.fresh {
             self.f.copy_from_slice(values);
         }

@@ -222,10 +222,14 @@ impl Integrator for Sdirk3 {
         }
     }
 
+    fn carried_len(&self) -> usize {
+        2 + 2 * self.m
+    }
+
     fn restore_carried(&mut self, values: &[f64]) {
         self.factored = None;
-        self.taken_at =
-            (values.len() == 2 + 2 * self.m).then(|| (values[0], values[1], values[2..].to_vec()));
+        self.taken_at = (values.len() == self.carried_len())
+            .then(|| (values[0], values[1], values[2..].to_vec()));
     }
 
     fn after_correction(&mut self) {

@@ -1,9 +1,12 @@
 //! Limits that keep a scene within what the numerics and the FMU's importers can carry:
 //! names and text that XML, file systems and C accept, masses whose ratios the
-//! constraint equations can resolve, and no two bars on the same pair of nodes.
+//! constraint equations can resolve, node positions and speeds a double resolves, and no
+//! two bars on the same pair of nodes. Restored FMU states are held to the same position
+//! and speed limits.
 
 use super::Scene;
 use crate::error::SceneError;
+use crate::numbers::shortest;
 
 /// Longest `name`, in characters: it names the FMU file and its folder when unzipped,
 /// and file systems allow 255 bytes.
@@ -17,6 +20,41 @@ pub const MASS_RANGE: (f64, f64) = (1e-15, 1e15);
 /// Largest ratio of two masses (bars and payloads): beyond it the mass matrix is so ill
 /// conditioned that λ and the reactions keep few correct digits.
 pub const MAX_MASS_RATIO: f64 = 1e8;
+/// Farthest a node may be from the origin along any axis, m: beyond it a double resolves
+/// less than 1e-7 m, too coarse to hold a bar's length.
+pub const MAX_COORDINATE: f64 = 1e9;
+/// Fastest a node may move along any axis, m/s: the speed of light, which nothing a
+/// scene in SI units describes reaches.
+pub const MAX_SPEED: f64 = 299_792_458.0;
+
+/// Refuses a node position outside ±[`MAX_COORDINATE`] on some axis (or not finite).
+pub fn check_position(key: &str, x: &[f64; 3]) -> Result<(), SceneError> {
+    check_bound(key, x, MAX_COORDINATE, "m", "coordinates")
+}
+
+/// Refuses a node velocity outside ±[`MAX_SPEED`] on some axis (or not finite).
+pub fn check_velocity(key: &str, v: &[f64; 3]) -> Result<(), SceneError> {
+    check_bound(key, v, MAX_SPEED, "m/s", "velocity components")
+}
+
+fn check_bound(
+    key: &str,
+    x: &[f64; 3],
+    bound: f64,
+    unit: &str,
+    what: &str,
+) -> Result<(), SceneError> {
+    let Some(axis) = x.iter().position(|c| c.is_nan() || c.abs() > bound) else {
+        return Ok(());
+    };
+    let (name, c) = (["x", "y", "z"][axis], shortest(x[axis]));
+    let reason = if x[axis].is_finite() {
+        format!("{name} = {c} {unit} is outside ±{bound:e} {unit}, the range of node {what}")
+    } else {
+        format!("{name} = {c} is not a finite number")
+    };
+    Err(SceneError::invalid(key, reason))
+}
 
 /// Checks `name`, `description`, the masses and duplicated bars.
 pub(super) fn check(scene: &Scene) -> Result<(), SceneError> {

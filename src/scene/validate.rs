@@ -23,6 +23,7 @@ pub(super) fn validate(scene: &Scene) -> Result<(), SceneError> {
     }
     for (i, p) in scene.nodes.iter().enumerate() {
         finite_vec(&format!("nodes[{}]", i + 1), p)?;
+        super::limits::check_position(&format!("nodes[{}]", i + 1), p)?;
     }
     let scale = size_of(scene);
     let node = |key: String, v: usize| -> Result<usize, SceneError> {
@@ -197,6 +198,7 @@ pub(super) fn validate(scene: &Scene) -> Result<(), SceneError> {
         }
         for (i, v) in vs.iter().enumerate() {
             finite_vec(&format!("velocities[{}]", i + 1), v)?;
+            super::limits::check_velocity(&format!("velocities[{}]", i + 1), v)?;
         }
     }
     if let Some(p) = &scene.prestress {

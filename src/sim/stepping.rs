@@ -3,7 +3,7 @@
 //! advance leaves the state where it began.
 
 use super::{events, Simulation, System};
-use crate::correction::bar_vector;
+use crate::correction::{bar_vector, MAX_UNCORRECTED_DRIFT};
 use crate::error::StepError;
 use crate::integrator::Outcome;
 
@@ -297,7 +297,7 @@ impl Simulation {
         let q = &self.state.y[..half];
         for (i, bar) in self.model.bars.iter().enumerate() {
             let error = (bar_vector(&self.model.coords, i, q, true).norm() - bar.length).abs();
-            if error > 0.01 * bar.length {
+            if error > MAX_UNCORRECTED_DRIFT * bar.length {
                 return Err(StepError::ConstraintDrift {
                     time: t,
                     bar: i + 1,

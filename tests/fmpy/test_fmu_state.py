@@ -1,6 +1,8 @@
 """FMU state: get/set/free, serialize/deserialize, and rejection of foreign or corrupt buffers (issue 3, item 4)."""
 
+import hashlib
 import struct
+import tomllib
 
 import numpy as np
 import pytest
@@ -267,3 +269,82 @@ def test_state_resumes_bit_identically_for_every_method(elastic, open_fmu, metho
         steps(s, 10, 20)
         assert np.array_equal(s.outputs(), ref.outputs())
         s.fmu.freeFMUstate(restored)
+
+
+# --- forged buffers: well-formed, resealed with a recomputed SHA-256 -----------------
+
+
+def layout(blob):
+    """Offsets of the fields a forger edits, read from the serialized layout: magic,
+    version, GUID, mode, two times, stop flag and time, then arrays with u64 lengths."""
+    at = 20 + struct.unpack_from("<Q", blob, 12)[0] + 1 + 8 + 8 + 1 + 8
+    fields = {}
+    for name, size in (("y", 8), ("force_density", 8), ("node_force", 24), ("rest_length", 8), ("warned", 1)):
+        (n,) = struct.unpack_from("<Q", blob, at)
+        fields[name] = (at, n)
+        at += 8 + n * size
+    at += 1  # the pending-rebuild flag
+    (n,) = struct.unpack_from("<Q", blob, at)
+    fields["parameters"] = (at, n)
+    return fields
+
+
+def resealed(body):
+    return bytes(body) + hashlib.sha256(bytes(body)).digest()
+
+
+def with_double(blob, field, k, value):
+    at, n = layout(blob)[field]
+    assert k < n
+    body = bytearray(blob[:-32])
+    struct.pack_into("<d", body, at + 8 + 8 * k, value)
+    return resealed(body)
+
+
+def parameter_index(fmu, name):
+    """The state holds parameter values in value-reference order."""
+    parameters = sorted(
+        (v for v in fmu.md.modelVariables if v.causality == "parameter"), key=lambda v: v.valueReference
+    )
+    return [v.name for v in parameters].index(name)
+
+
+def forged(fmu, blob):
+    return {
+        "solver.method = 7": with_double(blob, "parameters", parameter_index(fmu, "solver.method"), 7.0),
+        "solver.correction = 0.5": with_double(blob, "parameters", parameter_index(fmu, "solver.correction"), 0.5),
+        "node at 1e300 m": with_double(blob, "y", 0, 1e300),
+        "one force-density input short": short_array(blob, "force_density"),
+    }
+
+
+def short_array(blob, field):
+    at, n = layout(blob)[field]
+    body = blob[:at] + struct.pack("<Q", n - 1) + blob[at + 8 : at + 8 + 8 * (n - 1)] + blob[at + 8 + 8 * n : -32]
+    return resealed(body)
+
+
+@pytest.mark.parametrize(
+    "kind,parts",
+    [
+        ("solver.method = 7", ["solver.method = 7 is not a method (1 = rk4, 2 = dopri5, 3 = rattle, 4 = sdirk3)"]),
+        ("solver.correction = 0.5", ["solver.correction = 0.5 is not a Boolean (0 or 1)"]),
+        # The reduced coordinate moves a bar end by 1/√2 of itself (two bars share the node).
+        ("node at 1e300 m", ["position: x = 7.07106781186547", "e+299 m is outside ±1e9 m"]),
+        ("one force-density input short", ["holds {n} force-density inputs, this FMU has {cables}"]),
+    ],
+)
+def test_forged_state_with_a_recomputed_checksum_is_refused_naming_the_field(
+    fmus, open_fmu, prism2_blob, kind, parts
+):
+    fmu = fmus.builtin("prism2")
+    cables = len(tomllib.loads(fmu.scene_text)["cables"])  # all force-density controlled
+    bad = forged(fmu, prism2_blob)[kind]
+    assert hashlib.sha256(bad[:-32]).digest() == bad[-32:]
+    s = open_fmu(fmu).init()
+    s.run(10, 0.001)
+    assert_rejected_then_usable(s, bad, open_fmu)
+    refusals = [m for m in s.errors() if m.startswith("fmi2DeSerializeFMUstate: ")]
+    assert len(refusals) == 1, s.errors()
+    for part in parts:
+        assert part.format(n=cables - 1, cables=cables) in refusals[0], refusals[0]

@@ -1,14 +1,16 @@
 //! FMU state snapshots (`fmi2GetFMUstate`) and their serialized form: a magic, a format
 //! version and the GUID, then the state in little-endian fields, then a SHA-256 of it all.
 //! A buffer from another FMU, another version, with a wrong length or a bad checksum is
-//! rejected. Only parameters travel, never geometry or topology.
+//! rejected, and so is one whose fields the model does not allow (see `check`). Only
+//! parameters travel, never geometry or topology.
+
+mod check;
 
 use nalgebra::Vector3;
 use sha2::{Digest, Sha256};
 
-use super::parameters::apply_parameter;
 use super::state::Core;
-use super::variables::Binding;
+use super::variables::Variable;
 use super::Mode;
 use crate::sim::{Simulation, State};
 use fmi2_model_description::Causality;
@@ -52,12 +54,15 @@ impl Snapshot {
             rest_length: core.sim.inputs.rest_length.clone(),
             warned_negative: core.warned_negative.clone(),
             rebuild: core.rebuild,
-            parameters: parameter_bindings(core).map(|b| core.read(b)).collect(),
+            parameters: parameter_variables(core)
+                .map(|v| core.read(v.binding))
+                .collect(),
             h_next: core.sim.carried().0,
             carried: core.sim.carried().1,
         }
     }
 
+    /// Applies the state to `core` after checking it, or leaves `core` as it was.
     pub(super) fn restore(&self, guid: &str, core: &mut Core) -> Result<(), String> {
         if self.guid != guid {
             return Err(format!(
@@ -65,28 +70,13 @@ impl Snapshot {
                 self.guid
             ));
         }
-        let bindings: Vec<Binding> = parameter_bindings(core).collect();
-        if bindings.len() != self.parameters.len() {
-            return Err("the state does not match this FMU's parameters".into());
-        }
-        let mut scene = core.scene.clone();
-        for (&binding, &value) in bindings.iter().zip(&self.parameters) {
-            apply_parameter(&mut scene, binding, value);
-        }
+        let scene = self.check(core)?;
         let mut sim = if scene == core.scene {
             core.sim.clone()
         } else {
             // The restored state replaces the start positions: no equilibrium solve.
             Simulation::new(crate::model::Model::new(&scene).map_err(|e| e.to_string())?)
         };
-        let sizes_match = self.state.y.len() == sim.state().y.len()
-            && self.force_density.len() == sim.inputs.force_density.len()
-            && self.node_force.len() == sim.inputs.node_force.len()
-            && self.rest_length.len() == sim.inputs.rest_length.len()
-            && self.warned_negative.len() == core.warned_negative.len();
-        if !sizes_match {
-            return Err("the state does not match this FMU's structure".into());
-        }
         sim.inputs.force_density = self.force_density.clone();
         sim.inputs.node_force = self.node_force.clone();
         sim.inputs.rest_length = self.rest_length.clone();
@@ -142,7 +132,9 @@ impl Snapshot {
         out
     }
 
-    /// Parses a serialized state, checking magic, version and GUID.
+    /// Parses a serialized state, checking magic, version, GUID, checksum, flags and that
+    /// every number is finite; the checks against the model follow in
+    /// [`super::Instance::deserialize_state`] and [`super::Instance::set_state`].
     pub fn from_bytes(guid: &str, bytes: &[u8]) -> Result<Self, String> {
         let body_len = bytes
             .len()
@@ -169,8 +161,13 @@ impl Snapshot {
         let mode = mode_from(r.u8()?)?;
         let time = r.f64()?;
         let state_time = r.f64()?;
-        let has_stop = r.u8()? != 0;
+        let has_stop = r.flag("the stop-time flag")?;
         let stop = r.f64()?;
+        if !has_stop && stop != 0.0 {
+            return Err(format!(
+                "corrupt state: stop time {stop} s while its flag says there is none (allowed: 0)"
+            ));
+        }
         let n = r.len()?;
         let y = r.f64s(n)?;
         let n = r.len()?;
@@ -181,8 +178,13 @@ impl Snapshot {
             .collect::<Result<Vec<_>, String>>()?;
         let n = r.len()?;
         let rest_length = r.f64s(n)?;
-        let warned_negative = r.bytes()?.iter().map(|&b| b != 0).collect();
-        let rebuild = r.u8()? != 0;
+        let warned_negative = r
+            .bytes()?
+            .iter()
+            .enumerate()
+            .map(|(k, &b)| flag(b, &format!("negative-input warning flag {}", k + 1)))
+            .collect::<Result<Vec<_>, String>>()?;
+        let rebuild = r.flag("the pending-rebuild flag")?;
         let n = r.len()?;
         let parameters = r.f64s(n)?;
         let h_next = r.f64()?;
@@ -194,18 +196,27 @@ impl Snapshot {
         if Sha256::digest(bytes).as_slice() != digest {
             return Err("corrupt serialized state (checksum mismatch)".into());
         }
-        let finite = [time, state_time, stop]
-            .iter()
-            .chain(&y)
-            .chain(&force_density)
-            .chain(&rest_length)
-            .chain(&parameters)
-            .chain(&carried)
-            .chain([h_next].iter())
-            .all(|x| x.is_finite())
-            && node_force.iter().all(|f| f.iter().all(|x| x.is_finite()));
-        if !finite {
-            return Err("corrupt state: non-finite values".into());
+        let forces: Vec<f64> = node_force.iter().flat_map(|f| f.iter().copied()).collect();
+        let fields: [(&str, &[f64]); 10] = [
+            ("time", &[time]),
+            ("the integrated state's time", &[state_time]),
+            ("stop time", &[stop]),
+            ("state vector (η₂ and η̇₂)", &y),
+            ("force-density inputs", &force_density),
+            ("node-force inputs", &forces),
+            ("rest-length inputs", &rest_length),
+            ("parameter values", &parameters),
+            ("the adaptive method's next step", &[h_next]),
+            ("values carried by the integrator", &carried),
+        ];
+        for (what, values) in fields {
+            if let Some(k) = values.iter().position(|x| !x.is_finite()) {
+                return Err(format!(
+                    "corrupt state: {what}: value {} is {}, not a finite number",
+                    k + 1,
+                    values[k]
+                ));
+            }
         }
         // The communication time and the integrated state's time always agree; an edited
         // one would send the next fmi2DoStep integrating across the gap.
@@ -237,12 +248,22 @@ impl Snapshot {
     }
 }
 
-fn parameter_bindings(core: &Core) -> impl Iterator<Item = Binding> + '_ {
+fn parameter_variables(core: &Core) -> impl Iterator<Item = &Variable> + '_ {
     core.table
         .variables
         .iter()
         .filter(|v| v.causality == Causality::Parameter)
-        .map(|v| v.binding)
+}
+
+/// A Boolean byte: 0 or 1, nothing else.
+fn flag(byte: u8, what: &str) -> Result<bool, String> {
+    match byte {
+        0 => Ok(false),
+        1 => Ok(true),
+        _ => Err(format!(
+            "corrupt state: {what} is {byte}, but a Boolean is 0 or 1"
+        )),
+    }
 }
 
 fn mode_code(mode: Mode) -> u8 {
@@ -296,6 +317,9 @@ impl<'a> Reader<'a> {
     }
     fn u8(&mut self) -> Result<u8, String> {
         Ok(self.take(1)?[0])
+    }
+    fn flag(&mut self, what: &str) -> Result<bool, String> {
+        flag(self.u8()?, what)
     }
     fn len(&mut self) -> Result<usize, String> {
         let n = u64::from_le_bytes(self.take(8)?.try_into().expect("8 bytes"));
