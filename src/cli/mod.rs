@@ -7,6 +7,7 @@ mod bench_effects;
 mod bench_stiff;
 mod bench_threads;
 mod inputs;
+pub mod interrupt;
 mod render;
 mod report;
 mod simulate;
