@@ -28,8 +28,10 @@ pub fn to_mat(contents: &Contents) -> Result<Vec<u8>, String> {
     let expected: Vec<String> = file.iter().map(|(name, _)| name.clone()).collect();
     let bytes = serialize(file)?;
     // matrw's writer does not report I/O errors: read the bytes back before trusting them.
-    let back = matrw::load_matfile_from_u8(&bytes)
-        .map_err(|e| format!("the MAT-file written does not read back: {e}"))?;
+    let back = matrw::load_matfile_from_u8(&bytes).map_err(|e| {
+        let first = e.to_string().lines().next().unwrap_or_default().to_string();
+        format!("the MAT-file written does not read back: {first}")
+    })?;
     if let Some(missing) = expected.iter().find(|name| !back.contains(name)) {
         return Err(format!("the MAT-file written lacks `{missing}`"));
     }
@@ -52,19 +54,17 @@ fn doubles(rows: usize, cols: usize, values: &[f64]) -> Result<MatVariable, Stri
         .map_err(|e| e.to_string())
 }
 
-/// matrw saves to a path only: save to a private temporary file (created exclusively under
-/// a random name) and take its bytes, so that the caller can write the target whole or not
-/// at all.
+/// The bytes `matrw::save_matfile_v7` would write (uncompressed), written into memory:
+/// matrw's own function writes to a path and ignores write errors.
 fn serialize(file: MatFile) -> Result<Vec<u8>, String> {
-    let tmp = tempfile::Builder::new()
-        .prefix("tensegrity-fmu-")
-        .suffix(".mat")
-        .tempfile()
-        .map_err(|e| format!("cannot create a temporary file: {e}"))?
-        .into_temp_path();
-    let path = tmp
-        .to_str()
-        .ok_or_else(|| format!("{}: not UTF-8", tmp.display()))?;
-    matrw::save_matfile_v7(path, file, false).map_err(|e| e.to_string())?;
-    std::fs::read(&tmp).map_err(|e| format!("cannot read {}: {e}", tmp.display()))
+    use binrw::BinWrite;
+    use matrw::parser::header::{MatFileHeader, MatFileVerFlag};
+    use matrw::parser::v7::matfile7::MatFile7;
+    let header = MatFileHeader::new(MatFileVerFlag::V7);
+    let mut bytes = std::io::Cursor::new(Vec::new());
+    header
+        .write_options(&mut bytes, header.matfile_endian, ())
+        .and_then(|()| MatFile7::from(file).write_options(&mut bytes, header.matfile_endian, ()))
+        .map_err(|e| format!("cannot encode the MAT-file: {e}"))?;
+    Ok(bytes.into_inner())
 }
