@@ -262,6 +262,25 @@ pub fn write(target: &Path, bytes: &[u8]) -> Result<(), String> {
     write_with(target, |w| w.write_all(bytes))
 }
 
+/// An RGB buffer of `size` for plotters' `BitMapBackend::with_buffer`.
+pub fn blank_rgb((w, h): (u32, u32)) -> Vec<u8> {
+    vec![0u8; w as usize * h as usize * 3]
+}
+
+/// Writes the RGB pixels `rgb` of `size` as a PNG to `target`, whole or not at all
+/// (plotters' own PNG writer would write the target in place).
+pub fn write_png(target: &Path, rgb: &[u8], (w, h): (u32, u32)) -> Result<(), String> {
+    use image::ImageEncoder;
+    write_with(target, |out| {
+        image::codecs::png::PngEncoder::new(out)
+            .write_image(rgb, w, h, image::ColorType::Rgb8)
+            .map_err(|e| match e {
+                image::ImageError::IoError(e) => e,
+                e => std::io::Error::other(e),
+            })
+    })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -7,9 +7,9 @@ use std::path::Path;
 
 use plotters::prelude::*;
 
-use super::picture::{blank, draw_frame, drawing, fit, Style};
+use super::picture::{draw_frame, drawing, fit, Style};
 use super::Frames;
-use crate::partial::Partial;
+use crate::partial::{blank_rgb, Partial};
 
 /// Size of a GIF frame, pixels: smaller than a PNG, so that a long run encodes in seconds.
 pub const GIF_SIZE: (u32, u32) = (640, 540);
@@ -27,7 +27,7 @@ pub fn write_gif(frames: &Frames, fps: f64, style: &Style, path: &Path) -> Resul
     let fit = fit(frames, GIF_SIZE, style);
     let max = frames.max_tension();
     let (w, h) = GIF_SIZE;
-    let mut rgb = blank(GIF_SIZE);
+    let mut rgb = blank_rgb(GIF_SIZE);
     // Encoded into the hidden temporary as plotters' GIF backend would (which writes the
     // target in place): frames quantised at speed 10, the delay in whole 10 ms, looping.
     let (partial, file) = Partial::create(path)?;

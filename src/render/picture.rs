@@ -16,6 +16,7 @@ use super::labels::{self, LabelKind};
 use super::view::{depth, project, Fit, BAR_W, TITLE_H};
 pub use super::view::{plot_rect, Style};
 use super::Frames;
+use crate::partial;
 
 /// Bars.
 pub const BAR: RGBColor = RGBColor(35, 35, 35);
@@ -326,32 +327,14 @@ fn draw_colour_bar<DB: DrawingBackend>(
 pub fn write_png(frames: &Frames, k: usize, style: &Style, path: &Path) -> Result<(), String> {
     let what = path.display().to_string();
     let fit = fit(frames, PNG_SIZE, style);
-    let mut rgb = blank(PNG_SIZE);
+    let mut rgb = partial::blank_rgb(PNG_SIZE);
     {
         let root = BitMapBackend::with_buffer(&mut rgb, PNG_SIZE).into_drawing_area();
         root.fill(&WHITE).map_err(drawing(&what))?;
         draw_frame(&root, frames, k, &fit, frames.max_tension(), style)?;
         root.present().map_err(drawing(&what))?;
     }
-    save_png(path, &rgb, PNG_SIZE)
-}
-
-/// An RGB buffer of `size` for `BitMapBackend::with_buffer`.
-pub fn blank((w, h): (u32, u32)) -> Vec<u8> {
-    vec![0u8; w as usize * h as usize * 3]
-}
-
-/// Writes the RGB pixels `rgb` of `size` as a PNG to `path`, whole or not at all (plotters'
-/// own PNG writer would write the target in place).
-pub fn save_png(path: &Path, rgb: &[u8], (w, h): (u32, u32)) -> Result<(), String> {
-    crate::partial::write_with(path, |out| {
-        image::codecs::png::PngEncoder::new(out)
-            .write_image(rgb, w, h, image::ColorType::Rgb8)
-            .map_err(|e| match e {
-                image::ImageError::IoError(e) => e,
-                e => std::io::Error::other(e),
-            })
-    })
+    partial::write_png(path, &rgb, PNG_SIZE)
 }
 
 /// Size of the FMU icon `model.png`, pixels.
@@ -370,7 +353,7 @@ pub fn icon_png(frames: &Frames) -> Result<Vec<u8>, String> {
         )
     };
     let (w, h) = ICON_SIZE;
-    let mut rgb = blank(ICON_SIZE);
+    let mut rgb = partial::blank_rgb(ICON_SIZE);
     {
         let fit = fit(frames, ICON_SIZE, &style);
         let root = BitMapBackend::with_buffer(&mut rgb, ICON_SIZE).into_drawing_area();

@@ -9,7 +9,7 @@ use plotters::prelude::*;
 
 use super::{Report, RunRecord};
 use crate::integrator::Method;
-use crate::render::picture::{blank, save_png};
+use crate::partial::{blank_rgb, write_png};
 
 /// DejaVu Sans (see FONT-LICENSE.txt beside this file).
 static FONT: &[u8] = include_bytes!("DejaVuSans.ttf");
@@ -119,7 +119,7 @@ pub(crate) fn work_precision(report: &Report, path: &Path) -> Result<(), String>
             .chain(all().map(|p| p.2 * 10.0))
             .chain([report.reference.max_difference_m]),
     );
-    let mut rgb = blank(SIZE);
+    let mut rgb = blank_rgb(SIZE);
     let root = BitMapBackend::with_buffer(&mut rgb, SIZE).into_drawing_area();
     root.fill(&WHITE).map_err(io(path))?;
     let mut chart = ChartBuilder::on(&root)
@@ -201,7 +201,7 @@ pub(crate) fn work_precision(report: &Report, path: &Path) -> Result<(), String>
     root.present().map_err(io(path))?;
     drop(chart);
     drop(root);
-    save_png(path, &rgb, SIZE)
+    write_png(path, &rgb, SIZE)
 }
 
 /// The legend box both plots share.
@@ -317,7 +317,7 @@ pub(crate) fn constraint_error(report: &Report, path: &Path) -> Result<(), Strin
     // Headroom above the data for the legend.
     let y1 = y1 + ((y1 - y0) / 4.0).ceil();
     let t1 = report.horizon;
-    let mut rgb = blank(SIZE);
+    let mut rgb = blank_rgb(SIZE);
     let root = BitMapBackend::with_buffer(&mut rgb, SIZE).into_drawing_area();
     root.fill(&WHITE).map_err(io(path))?;
     let mut chart = ChartBuilder::on(&root)
@@ -375,5 +375,5 @@ pub(crate) fn constraint_error(report: &Report, path: &Path) -> Result<(), Strin
     root.present().map_err(io(path))?;
     drop(chart);
     drop(root);
-    save_png(path, &rgb, SIZE)
+    write_png(path, &rgb, SIZE)
 }
