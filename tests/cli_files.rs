@@ -211,17 +211,25 @@ fn start_long_run(dir: &Path) -> Child {
 }
 
 fn start_long_run_of(dir: &Path, target: &str) -> Child {
+    let args = [
+        "simulate",
+        "tower20",
+        "--time",
+        "5000",
+        "--interval",
+        "0.02",
+        "-o",
+        target,
+    ];
+    start_writing(dir, &args, target, 100_000)
+}
+
+/// Starts the CLI with `args` in `dir` and waits until its hidden temporary for `target`
+/// holds more than `min_len` bytes.
+fn start_writing(dir: &Path, args: &[&str], target: &str, min_len: u64) -> Child {
     let prefix = format!(".{target}.tmp");
     let mut child = Command::new(BIN)
-        .args([
-            "simulate",
-            "tower20",
-            "--time",
-            "5000",
-            "--interval",
-            "0.02",
-        ])
-        .args(["-o", target])
+        .args(args)
         .current_dir(dir)
         .stdout(Stdio::piped())
         .stderr(Stdio::piped())
@@ -229,17 +237,17 @@ fn start_long_run_of(dir: &Path, target: &str) -> Child {
         .unwrap();
     let start = Instant::now();
     loop {
-        let holds_rows = temporaries(dir).iter().any(|n| {
+        let written = temporaries(dir).iter().any(|n| {
             n.starts_with(&prefix)
-                && std::fs::metadata(dir.join(n)).is_ok_and(|m| m.len() > 100_000)
+                && std::fs::metadata(dir.join(n)).is_ok_and(|m| m.len() >= min_len)
         });
-        if holds_rows {
+        if written {
             return child;
         }
         if start.elapsed() > Duration::from_secs(120) || child.try_wait().unwrap().is_some() {
             let _ = child.kill();
             panic!(
-                "the run never wrote its temporary: {:?}",
+                "{args:?} never wrote its temporary: {:?}",
                 child.wait_with_output()
             );
         }
@@ -252,20 +260,23 @@ fn signal(child: &Child, signal: i32) {
     assert_eq!(unsafe { libc::kill(child.id() as i32, signal) }, 0);
 }
 
+/// Sends `sig` to `child`, writing `target` over "old" in `dir`: it ends with 128 + `sig`,
+/// leaving the old file and nothing else.
+fn assert_signal_keeps_the_old_file(dir: &Path, child: Child, sig: i32, target: &str) {
+    signal(&child, sig);
+    let out = child.wait_with_output().unwrap();
+    assert_eq!(out.status.code(), Some(128 + sig), "{target}");
+    assert_eq!(names(dir), [target], "{target}: no temporary left");
+    assert_eq!(std::fs::read_to_string(dir.join(target)).unwrap(), "old\n");
+}
+
 #[test]
 fn sigterm_and_sighup_remove_the_temporary_and_keep_the_old_file() {
     for (sig, name) in [(libc::SIGTERM, "term"), (libc::SIGHUP, "hup")] {
         let dir = folder(&format!("signal-{name}"));
         std::fs::write(dir.join("out.csv"), "old\n").unwrap();
         let child = start_long_run(&dir);
-        signal(&child, sig);
-        let out = child.wait_with_output().unwrap();
-        assert_eq!(out.status.code(), Some(128 + sig), "{name}");
-        assert_eq!(names(&dir), ["out.csv"], "{name}: no temporary left");
-        assert_eq!(
-            std::fs::read_to_string(dir.join("out.csv")).unwrap(),
-            "old\n"
-        );
+        assert_signal_keeps_the_old_file(&dir, child, sig, "out.csv");
     }
 }
 
@@ -273,28 +284,11 @@ fn sigterm_and_sighup_remove_the_temporary_and_keep_the_old_file() {
 fn sigint_outside_simulate_removes_the_temporary_and_keeps_the_old_file() {
     let dir = folder("signal-int-gif");
     std::fs::write(dir.join("out.gif"), "old\n").unwrap();
-    let mut child = Command::new(BIN)
-        .args([
-            "render", "prism2", "--time", "60", "--fps", "50", "-o", "out.gif",
-        ])
-        .current_dir(&dir)
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap();
-    let start = Instant::now();
-    while temporaries(&dir).is_empty() {
-        assert!(start.elapsed() < Duration::from_secs(120), "no temporary");
-        assert!(child.try_wait().unwrap().is_none(), "ended too soon");
-        std::thread::sleep(Duration::from_millis(20));
-    }
-    signal(&child, libc::SIGINT);
-    let out = child.wait_with_output().unwrap();
-    assert_eq!(out.status.code(), Some(128 + libc::SIGINT));
-    assert_eq!(names(&dir), ["out.gif"]);
-    assert_eq!(
-        std::fs::read_to_string(dir.join("out.gif")).unwrap(),
-        "old\n"
-    );
+    let args = [
+        "render", "prism2", "--time", "60", "--fps", "50", "-o", "out.gif",
+    ];
+    let child = start_writing(&dir, &args, "out.gif", 0);
+    assert_signal_keeps_the_old_file(&dir, child, libc::SIGINT, "out.gif");
 }
 
 #[test]
