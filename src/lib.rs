@@ -20,6 +20,7 @@ pub(crate) mod linalg;
 pub mod model;
 pub mod numbers;
 pub mod outputs;
+#[cfg(feature = "cli")]
 pub mod partial;
 #[cfg(feature = "cli")]
 pub mod render;

@@ -8,8 +8,14 @@ use clap::Parser;
 
 fn main() -> ExitCode {
     quiet_broken_pipe();
+    if let Err(message) = cli::interrupt::install() {
+        eprintln!("error: {message}");
+        return ExitCode::FAILURE;
+    }
     let args = cli::Cli::parse();
     match cli::run(args) {
+        // Stopped by Ctrl-C with what it had written kept: as a shell reports an interrupt.
+        Ok(()) if cli::interrupt::stop_requested() => ExitCode::from(130),
         Ok(()) => ExitCode::SUCCESS,
         Err(message) => {
             eprintln!("error: {message}");

@@ -7,7 +7,7 @@ use std::collections::BTreeSet;
 use std::process::Command;
 
 /// Crates that only the command line, pictures, plots, exports and packaging use.
-const CLI_ONLY: [&str; 12] = [
+const CLI_ONLY: [&str; 16] = [
     "clap",
     "libc",
     "zip",
@@ -20,6 +20,10 @@ const CLI_ONLY: [&str; 12] = [
     "matrw",
     "chrono",
     "png",
+    "tempfile",
+    "signal-hook",
+    "gif",
+    "binrw",
 ];
 
 /// The names of the crates `package` depends on (normal edges only), from `cargo tree`.

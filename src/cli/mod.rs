@@ -7,6 +7,7 @@ mod bench_effects;
 mod bench_stiff;
 mod bench_threads;
 mod inputs;
+pub mod interrupt;
 mod render;
 mod report;
 mod simulate;
@@ -281,7 +282,7 @@ pub fn run(cli: Cli) -> Result<(), String> {
                 let s = scene::builtin(name).expect("built-in");
                 let xml = fmi::package::golden_model_description(&s)?;
                 let path = dir.join(format!("{name}.xml"));
-                std::fs::write(&path, xml).map_err(|e| format!("{}: {e}", path.display()))?;
+                tensegrity_fmu::partial::write(&path, xml.as_bytes())?;
                 println!("{}", path.display());
             }
             Ok(())

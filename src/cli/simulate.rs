@@ -17,6 +17,7 @@ use tensegrity_fmu::scene::Scene;
 use tensegrity_fmu::{outputs, Simulation, StepError};
 
 use super::inputs::{isclose, InputTable};
+use super::interrupt;
 
 /// Most rows one `simulate` writes.
 pub const MAX_ROWS: f64 = 1e7;
@@ -37,7 +38,8 @@ pub struct Request {
     pub output: Option<PathBuf>,
 }
 
-/// Runs the scene and writes the CSV; on failure no CSV is left behind.
+/// Runs the scene and writes the CSV; on failure no CSV is left behind. Stopped by Ctrl-C,
+/// it keeps the rows written so far as a whole CSV.
 pub fn simulate(scene: Scene, request: Request) -> Result<(), String> {
     let Request {
         time,
@@ -93,6 +95,10 @@ pub fn simulate(scene: Scene, request: Request) -> Result<(), String> {
     }
     let path = output.unwrap_or_else(|| PathBuf::from(format!("{}.csv", scene.name)));
     let (partial, file) = Partial::create(&path)?;
+    // A hidden hook for the tests: a bug (a panic) while a temporary file is open.
+    if std::env::var_os("TENSEGRITY_FMU_TEST_PANIC").is_some() {
+        panic!("deliberate panic (TENSEGRITY_FMU_TEST_PANIC is set)");
+    }
     let io = |e: std::io::Error| format!("writing {}: {e}", path.display());
     let mut w = BufWriter::new(file);
     outputs::write_header(&mut w, &table).map_err(io)?;
@@ -101,18 +107,31 @@ pub fn simulate(scene: Scene, request: Request) -> Result<(), String> {
     let mut rows = RowThread::spawn(w, &table).map_err(io)?;
     let warned = unstable.as_deref();
     let evaluate = outputs::needs_evaluation(&table);
-    run(
+    let (mut written, mut last) = (0u64, 0.0);
+    interrupt::stoppable(true);
+    let ran = run(
         &mut sim,
         inputs.as_ref(),
         time,
         interval,
         warned,
         evaluate,
-        |sim| rows.send_row(sim).map_err(io),
-    )?;
+        |sim| {
+            (written, last) = (written + 1, sim.time());
+            rows.send_row(sim).map_err(io)
+        },
+    );
+    interrupt::stoppable(false);
+    ran?;
     let w = rows.finish().map_err(io)?;
     drop(w.into_inner().map_err(|e| io(e.into_error()))?);
     partial.commit()?;
+    if interrupt::stop_requested() {
+        eprintln!(
+            "interrupted at t = {last} s of {time} s: {} holds the {written} rows from t = 0 to {last} s",
+            path.display()
+        );
+    }
     println!("{}", path.display());
     Ok(())
 }
@@ -139,7 +158,8 @@ fn run(
     row(sim)?;
     let mut time = 0.0;
     let mut k = 0u64;
-    while !(time > stop || isclose(time, stop)) {
+    // A Ctrl-C ends the run at the last row written (see `interrupt`).
+    while !(time > stop || isclose(time, stop) || interrupt::stop_requested()) {
         let regular = (k + 1) as f64 * interval;
         let mut next = regular;
         let event = inputs.map_or(f64::INFINITY, |t| t.next_event(time));

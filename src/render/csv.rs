@@ -83,10 +83,27 @@ pub(crate) fn read(mut frames: Frames, n: usize, path: &Path) -> Result<Frames, 
                 names.len()
             ));
         }
-        let t = row[0];
-        if !t.is_finite() || frames.times.last().is_some_and(|&p| t < p) {
+        let drawn = pos
+            .iter()
+            .map(|&c| Some(c))
+            .chain(vel.iter().chain(&ten).chain(&force).copied());
+        if let Some(c) = std::iter::once(0)
+            .chain(drawn.flatten())
+            .find(|&c| !row[c].is_finite())
+        {
             return Err(format!(
-                "{}: time {t} is not finite or goes back; times must increase",
+                "{}: column `{}`: {} is not a finite number; a run that diverged cannot be \
+                 drawn: keep only the rows before this line, or run the scene again with a smaller step",
+                at(l + 1),
+                names[c],
+                row[c]
+            ));
+        }
+        let t = row[0];
+        if let Some(&p) = frames.times.last().filter(|&&p| t <= p) {
+            return Err(format!(
+                "{}: column `time`: {t} does not come after the previous row's {p}; times must \
+                 increase strictly from row to row, as `simulate` writes them",
                 at(l + 1)
             ));
         }

@@ -16,6 +16,7 @@ use super::labels::{self, LabelKind};
 use super::view::{depth, project, Fit, BAR_W, TITLE_H};
 pub use super::view::{plot_rect, Style};
 use super::Frames;
+use crate::partial;
 
 /// Bars.
 pub const BAR: RGBColor = RGBColor(35, 35, 35);
@@ -326,11 +327,14 @@ fn draw_colour_bar<DB: DrawingBackend>(
 pub fn write_png(frames: &Frames, k: usize, style: &Style, path: &Path) -> Result<(), String> {
     let what = path.display().to_string();
     let fit = fit(frames, PNG_SIZE, style);
-    let root = BitMapBackend::new(path, PNG_SIZE).into_drawing_area();
-    root.fill(&WHITE).map_err(drawing(&what))?;
-    draw_frame(&root, frames, k, &fit, frames.max_tension(), style)?;
-    root.present().map_err(drawing(&what))?;
-    Ok(())
+    let mut rgb = partial::blank_rgb(PNG_SIZE);
+    {
+        let root = BitMapBackend::with_buffer(&mut rgb, PNG_SIZE).into_drawing_area();
+        root.fill(&WHITE).map_err(drawing(&what))?;
+        draw_frame(&root, frames, k, &fit, frames.max_tension(), style)?;
+        root.present().map_err(drawing(&what))?;
+    }
+    partial::write_png(path, &rgb, PNG_SIZE)
 }
 
 /// Size of the FMU icon `model.png`, pixels.
@@ -349,7 +353,7 @@ pub fn icon_png(frames: &Frames) -> Result<Vec<u8>, String> {
         )
     };
     let (w, h) = ICON_SIZE;
-    let mut rgb = vec![0u8; (w * h * 3) as usize];
+    let mut rgb = partial::blank_rgb(ICON_SIZE);
     {
         let fit = fit(frames, ICON_SIZE, &style);
         let root = BitMapBackend::with_buffer(&mut rgb, ICON_SIZE).into_drawing_area();

@@ -18,14 +18,16 @@
 //! values, no compression), so every double reads back bit for bit. Times in the `.pvd` are written as the shortest decimal that reads back
 //! as the same double.
 //!
-//! Nothing is left half-written: the `.vtp` files go into a temporary folder and the
-//! collection into a temporary file beside the target; both are renamed into place only
-//! when everything has been written, and removed on failure. An existing `NAME_vtp/`
-//! folder is replaced only if it holds nothing but `.vtp` files.
+//! Nothing is left half-written: the `.vtp` files go into a hidden temporary folder and the
+//! collection into a hidden temporary file beside the target (see [`crate::partial`]); both
+//! are renamed into place only when everything has been written, and removed on failure.
+//! An existing `NAME_vtp/` folder is replaced only if it holds nothing but `.vtp` files.
 
 use std::fs::{self, File};
 use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
+
+use crate::partial::{commit_folder_and_file, Partial, PartialDir};
 
 use base64::engine::general_purpose::STANDARD as BASE64;
 use base64::Engine;
@@ -65,50 +67,11 @@ pub fn write_pvd(frames: &Frames, path: &Path) -> Result<(), String> {
         replaceable(&folder)?;
     }
 
-    let id = std::process::id();
-    let tmp_folder = parent.join(format!(".{folder_name}.tmp-{id}"));
-    let tmp_pvd = parent.join(format!(".{stem}.pvd.tmp-{id}"));
-    let cleanup = || {
-        let _ = fs::remove_dir_all(&tmp_folder);
-        let _ = fs::remove_file(&tmp_pvd);
-    };
-    cleanup();
-    let written = write_all(frames, stem, &folder_name, &tmp_folder, &tmp_pvd);
-    if let Err(e) = written {
-        cleanup();
-        return Err(e);
-    }
-
-    // Into place: the old folder aside, the new one in, the collection, the old one away.
-    let old = parent.join(format!(".{folder_name}.old-{id}"));
-    let _ = fs::remove_dir_all(&old);
-    let had_old = folder.exists();
-    if had_old {
-        if let Err(e) = fs::rename(&folder, &old) {
-            cleanup();
-            return Err(format!("{}: cannot replace: {e}", folder.display()));
-        }
-    }
-    let restore = || {
-        if had_old {
-            let _ = fs::rename(&old, &folder);
-        }
-    };
-    if let Err(e) = fs::rename(&tmp_folder, &folder) {
-        cleanup();
-        restore();
-        return Err(format!("{}: cannot create: {e}", folder.display()));
-    }
-    if let Err(e) = fs::rename(&tmp_pvd, path) {
-        let _ = fs::remove_dir_all(&folder);
-        cleanup();
-        restore();
-        return Err(format!("{shown}: cannot create: {e}"));
-    }
-    if had_old {
-        let _ = fs::remove_dir_all(&old);
-    }
-    Ok(())
+    let tmp_folder = PartialDir::create(&folder)?;
+    let (tmp_pvd, pvd) = Partial::create(path)?;
+    write_all(frames, stem, &folder_name, tmp_folder.path(), pvd)
+        .map_err(|e| format!("cannot write {shown}: {e}"))?;
+    commit_folder_and_file(tmp_folder, tmp_pvd)
 }
 
 /// The frames are consistent: every time has a position and velocity per node, a tension
@@ -195,19 +158,24 @@ fn write_all(
     stem: &str,
     folder_name: &str,
     tmp_folder: &Path,
-    tmp_pvd: &Path,
+    pvd: File,
 ) -> Result<(), String> {
-    fs::create_dir(tmp_folder).map_err(|e| format!("{}: {e}", tmp_folder.display()))?;
     let digits = frames.len().saturating_sub(1).to_string().len().max(4);
     let names: Vec<String> = (0..frames.len())
         .map(|k| format!("{stem}_{k:0digits$}.vtp"))
         .collect();
     for (k, name) in names.iter().enumerate() {
+        // A new file in a new private folder: nothing planted there to follow.
         let file = tmp_folder.join(name);
-        write_vtp(frames, k, &file).map_err(|e| format!("{}: {e}", file.display()))?;
+        fs::OpenOptions::new()
+            .write(true)
+            .create_new(true)
+            .open(&file)
+            .map_err(|e| e.to_string())
+            .and_then(|out| write_vtp(frames, k, out))
+            .map_err(|e| format!("{name}: {e}"))?;
     }
-    write_collection(frames, folder_name, &names, tmp_pvd)
-        .map_err(|e| format!("{}: {e}", tmp_pvd.display()))
+    write_collection(frames, folder_name, &names, pvd)
 }
 
 /// A number type of a VTK `DataArray`: its `type` name and its little-endian bytes.
@@ -269,13 +237,13 @@ fn data_array<W: Write, T: Element>(
 
 /// A `VTKFile` of `kind` in `file`, its content written by `body`.
 fn write_vtk_file(
-    file: &Path,
+    file: File,
     kind: &str,
     version: &str,
     header_type: Option<&str>,
     body: impl FnOnce(&mut Writer<BufWriter<File>>) -> std::io::Result<()>,
 ) -> Result<(), String> {
-    let out = BufWriter::new(File::create(file).map_err(|e| e.to_string())?);
+    let out = BufWriter::new(file);
     let mut xml = Writer::new_with_indent(out, b' ', 2);
     xml.write_event(Event::Decl(BytesDecl::new("1.0", None, None)))
         .map_err(|e| e.to_string())?;
@@ -294,7 +262,7 @@ fn write_vtk_file(
 }
 
 /// The `.vtp` of time `k`.
-fn write_vtp(frames: &Frames, k: usize, file: &Path) -> Result<(), String> {
+fn write_vtp(frames: &Frames, k: usize, file: File) -> Result<(), String> {
     let n = frames.n_nodes();
     let (nb, nc) = (frames.bars.len(), frames.cables.len());
     let points: Vec<f64> = frames.positions[k].iter().flatten().copied().collect();
@@ -360,7 +328,7 @@ fn write_collection(
     frames: &Frames,
     folder_name: &str,
     names: &[String],
-    file: &Path,
+    file: File,
 ) -> Result<(), String> {
     write_vtk_file(file, "Collection", "0.1", None, |xml| {
         xml.create_element("Collection")

@@ -346,8 +346,7 @@ pub fn accuracy(scene: &Scene, options: &Options, out_dir: &Path) -> Result<Repo
         report.constraint_error = Some(out_dir.join("constraint_error.png"));
     }
     report.markdown = table::markdown(&report, o.load, &unconserved_terms(&model));
-    std::fs::write(&report.csv, table::csv(&report.runs))
-        .map_err(|e| format!("writing {}: {e}", report.csv.display()))?;
+    crate::partial::write(&report.csv, table::csv(&report.runs).as_bytes())?;
     if let Some(path) = &report.work_precision {
         plot::work_precision(&report, path)?;
     }

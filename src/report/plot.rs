@@ -9,6 +9,7 @@ use plotters::prelude::*;
 
 use super::{Report, RunRecord};
 use crate::integrator::Method;
+use crate::partial::{blank_rgb, write_png};
 
 /// DejaVu Sans (see FONT-LICENSE.txt beside this file).
 static FONT: &[u8] = include_bytes!("DejaVuSans.ttf");
@@ -118,7 +119,8 @@ pub(crate) fn work_precision(report: &Report, path: &Path) -> Result<(), String>
             .chain(all().map(|p| p.2 * 10.0))
             .chain([report.reference.max_difference_m]),
     );
-    let root = BitMapBackend::new(path, SIZE).into_drawing_area();
+    let mut rgb = blank_rgb(SIZE);
+    let root = BitMapBackend::with_buffer(&mut rgb, SIZE).into_drawing_area();
     root.fill(&WHITE).map_err(io(path))?;
     let mut chart = ChartBuilder::on(&root)
         .caption(
@@ -196,7 +198,10 @@ pub(crate) fn work_precision(report: &Report, path: &Path) -> Result<(), String>
     }
     // Curves fall from upper left to lower right: the upper right stays clear.
     draw_legend(&mut chart, SeriesLabelPosition::UpperRight).map_err(io(path))?;
-    root.present().map_err(io(path))
+    root.present().map_err(io(path))?;
+    drop(chart);
+    drop(root);
+    write_png(path, &rgb, SIZE)
 }
 
 /// The legend box both plots share.
@@ -312,7 +317,8 @@ pub(crate) fn constraint_error(report: &Report, path: &Path) -> Result<(), Strin
     // Headroom above the data for the legend.
     let y1 = y1 + ((y1 - y0) / 4.0).ceil();
     let t1 = report.horizon;
-    let root = BitMapBackend::new(path, SIZE).into_drawing_area();
+    let mut rgb = blank_rgb(SIZE);
+    let root = BitMapBackend::with_buffer(&mut rgb, SIZE).into_drawing_area();
     root.fill(&WHITE).map_err(io(path))?;
     let mut chart = ChartBuilder::on(&root)
         .caption(
@@ -366,5 +372,8 @@ pub(crate) fn constraint_error(report: &Report, path: &Path) -> Result<(), Strin
             .legend(move |(x, y)| PathElement::new([(x, y), (x + 30, y)], c.stroke_width(3)));
     }
     draw_legend(&mut chart, SeriesLabelPosition::UpperRight).map_err(io(path))?;
-    root.present().map_err(io(path))
+    root.present().map_err(io(path))?;
+    drop(chart);
+    drop(root);
+    write_png(path, &rgb, SIZE)
 }

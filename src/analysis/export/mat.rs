@@ -1,7 +1,6 @@
 //! `.mat`: a MATLAB Level-5 MAT-file (what `save -v7` writes, here uncompressed; MATLAB's
-//! `load` and `scipy.io.loadmat` read it), written with matrw.
-
-use std::sync::atomic::{AtomicUsize, Ordering};
+//! `load` and `scipy.io.loadmat` read it), written with matrw. Its text is ASCII: other
+//! characters (in the scene's name, say) are written as `?`.
 
 use matrw::{CellArray, MatFile, MatVariable, MatlabType, NumericArray};
 
@@ -18,20 +17,34 @@ pub fn to_mat(contents: &Contents) -> Result<Vec<u8>, String> {
         file.insert(name, doubles(v.len(), 1, v)?);
     }
     for (name, list) in contents.names {
-        let cells = list.iter().map(|s| MatVariable::from(s.as_str())).collect();
+        let cells = list
+            .iter()
+            .map(|s| MatVariable::from(ascii(s).as_str()))
+            .collect();
         let cells = CellArray::new(vec![list.len(), 1], cells).map_err(|e| e.to_string())?;
         file.insert(name, MatVariable::CellArray(cells));
     }
-    file.insert("scene", MatVariable::from(contents.scene));
+    file.insert("scene", MatVariable::from(ascii(contents.scene).as_str()));
     let expected: Vec<String> = file.iter().map(|(name, _)| name.clone()).collect();
     let bytes = serialize(file)?;
     // matrw's writer does not report I/O errors: read the bytes back before trusting them.
-    let back = matrw::load_matfile_from_u8(&bytes)
-        .map_err(|e| format!("the MAT-file written does not read back: {e}"))?;
+    let back = matrw::load_matfile_from_u8(&bytes).map_err(|e| {
+        let first = e.to_string().lines().next().unwrap_or_default().to_string();
+        format!("the MAT-file written does not read back: {first}")
+    })?;
     if let Some(missing) = expected.iter().find(|name| !back.contains(name)) {
         return Err(format!("the MAT-file written lacks `{missing}`"));
     }
     Ok(bytes)
+}
+
+/// `text` with every character outside ASCII as `?`: matrw 0.1.4 writes a character as
+/// its UTF-8 bytes but counts it as one, so any other text makes a file that neither it
+/// nor MATLAB reads back.
+fn ascii(text: &str) -> String {
+    text.chars()
+        .map(|c| if c.is_ascii() { c } else { '?' })
+        .collect()
 }
 
 /// A double matrix from column-major values (nalgebra's and MATLAB's order).
@@ -41,22 +54,17 @@ fn doubles(rows: usize, cols: usize, values: &[f64]) -> Result<MatVariable, Stri
         .map_err(|e| e.to_string())
 }
 
-/// matrw saves to a path only: save to a private temporary file and take its bytes, so that
-/// the caller can write the target whole or not at all.
+/// The bytes `matrw::save_matfile_v7` would write (uncompressed), written into memory:
+/// matrw's own function writes to a path and ignores write errors.
 fn serialize(file: MatFile) -> Result<Vec<u8>, String> {
-    static COUNTER: AtomicUsize = AtomicUsize::new(0);
-    let tmp = std::env::temp_dir().join(format!(
-        "tensegrity-fmu-{}-{}.mat",
-        std::process::id(),
-        COUNTER.fetch_add(1, Ordering::Relaxed)
-    ));
-    let path = tmp
-        .to_str()
-        .ok_or_else(|| format!("{}: not UTF-8", tmp.display()))?;
-    let saved = matrw::save_matfile_v7(path, file, false).map_err(|e| e.to_string());
-    let bytes = saved.and_then(|()| {
-        std::fs::read(&tmp).map_err(|e| format!("cannot read {}: {e}", tmp.display()))
-    });
-    let _ = std::fs::remove_file(&tmp);
-    bytes
+    use binrw::BinWrite;
+    use matrw::parser::header::{MatFileHeader, MatFileVerFlag};
+    use matrw::parser::v7::matfile7::MatFile7;
+    let header = MatFileHeader::new(MatFileVerFlag::V7);
+    let mut bytes = std::io::Cursor::new(Vec::new());
+    header
+        .write_options(&mut bytes, header.matfile_endian, ())
+        .and_then(|()| MatFile7::from(file).write_options(&mut bytes, header.matfile_endian, ()))
+        .map_err(|e| format!("cannot encode the MAT-file: {e}"))?;
+    Ok(bytes.into_inner())
 }
