@@ -7,9 +7,11 @@ mod bench_effects;
 mod bench_stiff;
 mod bench_threads;
 mod inputs;
+mod progress;
 mod render;
 mod report;
 mod simulate;
+mod work;
 
 use std::path::PathBuf;
 
@@ -66,6 +68,9 @@ enum Command {
         /// CSV file (default: <scene name>.csv).
         #[arg(short, long)]
         output: Option<PathBuf>,
+        /// Run even when the run is predicted to take more than 1e7 internal steps.
+        #[arg(long)]
+        force: bool,
     },
     /// Package a scene as an FMI 2.0 co-simulation FMU and print its path.
     Build {
@@ -204,6 +209,7 @@ pub fn run(cli: Cli) -> Result<(), String> {
             rtol,
             atol,
             output,
+            force,
         } => {
             let mut scene = Scene::from_name_or_file(scene.as_deref().unwrap_or(BUILTIN_DEFAULT))
                 .map_err(|e| e.to_string())?;
@@ -223,6 +229,7 @@ pub fn run(cli: Cli) -> Result<(), String> {
                 interval,
                 inputs,
                 output,
+                force,
             };
             simulate::simulate(scene, request)
         }

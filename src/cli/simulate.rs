@@ -17,6 +17,8 @@ use tensegrity_fmu::scene::Scene;
 use tensegrity_fmu::{outputs, Simulation, StepError};
 
 use super::inputs::{isclose, InputTable};
+use super::progress::Progress;
+use super::work;
 
 /// Most rows one `simulate` writes.
 pub const MAX_ROWS: f64 = 1e7;
@@ -35,6 +37,8 @@ pub struct Request {
     pub inputs: Option<PathBuf>,
     /// CSV to write (default: `<scene name>.csv`).
     pub output: Option<PathBuf>,
+    /// Run past [`super::work::MAX_STEPS`] predicted steps.
+    pub force: bool,
 }
 
 /// Runs the scene and writes the CSV; on failure no CSV is left behind.
@@ -44,6 +48,7 @@ pub fn simulate(scene: Scene, request: Request) -> Result<(), String> {
         interval,
         inputs,
         output,
+        force,
     } = request;
     let model = tensegrity_fmu::analysis::load(&scene).map_err(|e| e.to_string())?;
     let h = model.solver.step_size;
@@ -91,6 +96,9 @@ pub fn simulate(scene: Scene, request: Request) -> Result<(), String> {
     if let Some(why) = sim.accuracy_problem() {
         eprintln!("warning: {why}");
     }
+    let refused = "simulate refused, no CSV written";
+    let predicted = work::predict(&mut sim, time, interval, force, refused)?;
+    let progress = Progress::new(time, predicted.seconds);
     let path = output.unwrap_or_else(|| PathBuf::from(format!("{}.csv", scene.name)));
     let (partial, file) = Partial::create(&path)?;
     let io = |e: std::io::Error| format!("writing {}: {e}", path.display());
@@ -101,15 +109,20 @@ pub fn simulate(scene: Scene, request: Request) -> Result<(), String> {
     let mut rows = RowThread::spawn(w, &table).map_err(io)?;
     let warned = unstable.as_deref();
     let evaluate = outputs::needs_evaluation(&table);
-    run(
+    let ran = run(
         &mut sim,
         inputs.as_ref(),
         time,
         interval,
         warned,
         evaluate,
-        |sim| rows.send_row(sim).map_err(io),
-    )?;
+        |sim| {
+            progress.reached(sim.time());
+            rows.send_row(sim).map_err(io)
+        },
+    );
+    progress.finish();
+    ran?;
     let w = rows.finish().map_err(io)?;
     drop(w.into_inner().map_err(|e| io(e.into_error()))?);
     partial.commit()?;

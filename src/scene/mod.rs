@@ -4,10 +4,12 @@
 //! message, a CSV column or an FMU variable uses that numbering.
 
 mod builtin;
+mod extreme;
 pub mod limits;
 mod read;
 mod validate;
 
+pub use extreme::{extreme_scenes, Extreme};
 pub use builtin::{
     builtin, builtin_names, generate, steel_prism_scene, tower_scene, BUILTIN_DEFAULT,
 };

@@ -14,9 +14,11 @@ mod cause;
 mod events;
 mod stability;
 mod stepping;
+mod work;
 
 pub use cause::{Cause, Rate};
 pub use stability::stability_limit;
+pub use work::{fixed_steps, Pace, Work, RESOLVING_STEP, STABLE_ATTEMPTS_PER_RATE};
 
 /// The integrated state.
 #[derive(Debug, Clone, PartialEq)]

@@ -218,7 +218,7 @@ impl Simulation {
     }
 
     /// One attempt from `t` with step `h`, then the correction and the finiteness check.
-    fn attempt(&mut self, t: f64, h: f64) -> Result<Outcome, StepError> {
+    pub(super) fn attempt(&mut self, t: f64, h: f64) -> Result<Outcome, StepError> {
         // The state moves: what the last refresh evaluated serves this step's start only.
         let fresh = self.evaluated.take() == Some(t) && self.evaluated_inputs == self.inputs;
         let mut system = System {
