@@ -79,6 +79,9 @@ impl Simulation {
         if steps.is_nan() || steps > max as f64 {
             return Err(StepError::TooManySteps {
                 what: format!("this advance ({steps:.3e} steps of {dt} s)"),
+                fixes: "Use shorter communication steps or intervals, a larger \
+                        solver.step_size, or raise solver.max_steps"
+                    .into(),
                 max,
                 from: t,
                 to: t_end,
@@ -129,6 +132,7 @@ impl Simulation {
             if attempts == max {
                 return Err(StepError::TooManySteps {
                     what: format!("this advance with {}", self.integrator.name()),
+                    fixes: self.short_steps_note(),
                     max,
                     from: self.advance_start.time,
                     to: t_end,
