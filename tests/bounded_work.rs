@@ -108,7 +108,12 @@ fn the_fmu_names_the_stiff_element_when_max_steps_runs_out() {
     fmu.drain_messages();
     let message = fmu.do_step(0.0, 1.0).unwrap_err().message;
     println!("{message}");
-    assert!(message.starts_with("fmi2DoStep: this advance with dopri5 takes more than solver.max_steps = 100000"), "{message}");
+    assert!(
+        message.starts_with(
+            "fmi2DoStep: this advance with dopri5 takes more than solver.max_steps = 100000"
+        ),
+        "{message}"
+    );
     assert!(
         message.contains("the stiffness of cables[4] (elastic, stiffness 5e14 N/m)"),
         "{message}"

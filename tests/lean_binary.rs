@@ -7,7 +7,7 @@ use std::collections::BTreeSet;
 use std::process::Command;
 
 /// Crates that only the command line, pictures, plots, exports and packaging use.
-const CLI_ONLY: [&str; 12] = [
+const CLI_ONLY: [&str; 14] = [
     "clap",
     "libc",
     "zip",
@@ -20,6 +20,8 @@ const CLI_ONLY: [&str; 12] = [
     "matrw",
     "chrono",
     "png",
+    "indicatif",
+    "console",
 ];
 
 /// The names of the crates `package` depends on (normal edges only), from `cargo tree`.

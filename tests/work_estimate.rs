@@ -50,7 +50,11 @@ fn every_extreme_scene_is_refused_up_front_naming_its_element() {
             err.starts_with("error: simulate refused, no CSV written: this run would take about "),
             "{err}"
         );
-        assert!(err.contains(extreme.key), "{} not named: {err}", extreme.key);
+        assert!(
+            err.contains(extreme.key),
+            "{} not named: {err}",
+            extreme.key
+        );
         for remedy in ["solver.method = \"sdirk3\"", "a softer element", "--force"] {
             assert!(err.contains(remedy), "{remedy}: {err}");
         }
@@ -134,7 +138,10 @@ fn render_is_refused_too() {
     let gif = temp("heavy.gif");
     let (ok, _, err) = run(&["render", &scene_file(&scene), "-o", gif.to_str().unwrap()]);
     assert!(!ok, "{err}");
-    assert!(err.starts_with("error: render refused, nothing drawn: "), "{err}");
+    assert!(
+        err.starts_with("error: render refused, nothing drawn: "),
+        "{err}"
+    );
     assert!(err.contains("the gravity, |gravity| = 1e15 m/s²"), "{err}");
     assert!(!gif.exists());
 }

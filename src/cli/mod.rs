@@ -6,6 +6,7 @@ mod bench_csv;
 mod bench_effects;
 mod bench_stiff;
 mod bench_threads;
+mod bench_work;
 mod inputs;
 mod progress;
 mod render;
@@ -179,6 +180,9 @@ enum BenchCommand {
         #[arg(long, default_value_t = 5)]
         repeats: usize,
     },
+    /// The internal steps and wall time predicted before a run against those it takes,
+    /// for seven extreme scenes and the shipped ones (1 s, a row every step).
+    Work,
     /// µs per step of large towers evaluated on one thread and on two, in alternation in
     /// one process, with the median ratio of the rounds.
     Threads {
@@ -265,6 +269,10 @@ pub fn run(cli: Cli) -> Result<(), String> {
             what: Some(BenchCommand::Stiff { repeats }),
             ..
         } => bench_stiff::run(repeats),
+        Command::Bench {
+            what: Some(BenchCommand::Work),
+            ..
+        } => bench_work::run(),
         Command::Bench {
             what: None,
             stages,

@@ -213,7 +213,6 @@ fn simulate(scene: &Scene, times: &[f64], force: bool) -> Result<Frames, String>
     let interval = times.get(1).map_or(stop, |t| t - times[0]);
     Frames::from_checked_run(scene, times, |sim| {
         let refused = "render refused, nothing drawn";
-        super::work::predict(sim, stop, interval.max(f64::MIN_POSITIVE), force, refused)
-            .map(|_| ())
+        super::work::predict(sim, stop, interval.max(f64::MIN_POSITIVE), force, refused).map(|_| ())
     })
 }

@@ -61,9 +61,9 @@ fn refusal(
         work.steps
     );
     let named = |why: &str| {
-        work.rate
-            .as_ref()
-            .map_or(String::new(), |r| format!("{why}{}", r.describe(model, inputs)))
+        work.rate.as_ref().map_or(String::new(), |r| {
+            format!("{why}{}", r.describe(model, inputs))
+        })
     };
     let h = solver.step_size;
     if work.pace == Pace::Fixed {
@@ -71,6 +71,12 @@ fn refusal(
             "{head}: {method} takes fixed steps of solver.step_size = {h} s{}. Use a larger \
              --step-size or a shorter --time, or pass --force to run it anyway",
             named("; the fastest time scale here is set by ")
+        );
+    }
+    if work.pace == Pace::Rows {
+        return format!(
+            "{head}: each row (every --interval {interval} s) ends an internal step. Use a \
+             larger --interval or a shorter --time, or pass --force to run it anyway"
         );
     }
     let why = match work.pace {
@@ -96,9 +102,10 @@ fn refusal(
     )
 }
 
-/// "3.2 s", "4.1 min", "2.5 h", "3.1 days".
+/// "0.012 s", "3.2 s", "4.1 min", "2.5 h", "3.1 days".
 pub fn duration(seconds: f64) -> String {
     match seconds {
+        s if s < 1.0 => format!("{s:.3} s"),
         s if s < 120.0 => format!("{s:.1} s"),
         s if s < 7200.0 => format!("{:.1} min", s / 60.0),
         s if s < 172_800.0 => format!("{:.1} h", s / 3600.0),

@@ -9,10 +9,10 @@ pub mod limits;
 mod read;
 mod validate;
 
-pub use extreme::{extreme_scenes, Extreme};
 pub use builtin::{
     builtin, builtin_names, generate, steel_prism_scene, tower_scene, BUILTIN_DEFAULT,
 };
+pub use extreme::{extreme_scenes, Extreme};
 
 use serde::{Deserialize, Serialize};
 use std::path::Path;

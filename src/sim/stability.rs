@@ -75,7 +75,15 @@ impl Simulation {
             .map(|i| ((i * 7 + 3) % 11) as f64 - 5.0 + 0.5)
             .collect();
         let mut a0 = vec![0.0; half];
-        dynamics::accelerations(&self.model, &self.inputs, t, &q0, &zero, &mut self.ws, &mut a0);
+        dynamics::accelerations(
+            &self.model,
+            &self.inputs,
+            t,
+            &q0,
+            &zero,
+            &mut self.ws,
+            &mut a0,
+        );
         let mut q = vec![0.0; half];
         let (mut ahead, mut behind) = (vec![0.0; half], vec![0.0; half]);
         let mut lambda = 0.0;

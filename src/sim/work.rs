@@ -34,6 +34,8 @@ pub enum Pace {
     Stability,
     /// dopri5 following a fast motion to its tolerance.
     Accuracy,
+    /// dopri5 clipped to the output rows: it would take longer steps than their interval.
+    Rows,
 }
 
 /// A run's predicted work.
@@ -68,6 +70,11 @@ impl Simulation {
             };
         }
         let (pace, rate, per_second) = self.adaptive_pace();
+        let pace = if interval * per_second <= 1.0 {
+            Pace::Rows
+        } else {
+            pace
+        };
         Work {
             steps: count(&|d| (d * per_second).ceil().max(1.0)),
             step: 1.0 / per_second,
@@ -111,7 +118,10 @@ impl Simulation {
         let (load, pushed) = (0..model.scene.loads.len())
             .map(|k| {
                 let n = model.scene.loads[k].node() - 1;
-                (k, cause::load_force(model, k) * cause::node_compliance(model, n))
+                (
+                    k,
+                    cause::load_force(model, k) * cause::node_compliance(model, n),
+                )
             })
             .fold((0, 0.0), |best, c| if c.1 > best.1 { c } else { best });
         let gravity = model.gravity.map_or(0.0, |g| g.norm());
@@ -184,5 +194,10 @@ pub fn fixed_steps(span: f64, interval: f64, h: f64) -> f64 {
 fn rows(span: f64, interval: f64, per_row: &dyn Fn(f64) -> f64) -> f64 {
     let full = (span / interval + 1e-9).floor();
     let rest = span - full * interval;
-    full * per_row(interval) + if rest > 1e-9 * interval { per_row(rest) } else { 0.0 }
+    full * per_row(interval)
+        + if rest > 1e-9 * interval {
+            per_row(rest)
+        } else {
+            0.0
+        }
 }
