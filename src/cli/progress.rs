@@ -29,7 +29,7 @@ impl Progress {
             _ if seconds.is_some_and(|s| s > AFTER) => ProgressDrawTarget::stderr(),
             _ => ProgressDrawTarget::hidden(),
         };
-        if target.is_hidden() || !(stop > 0.0) {
+        if target.is_hidden() || stop <= 0.0 {
             return Self { bar: None, stop };
         }
         let bar = ProgressBar::with_draw_target(Some(TICKS), target);

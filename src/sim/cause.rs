@@ -334,7 +334,7 @@ pub fn damping_rates(model: &Model) -> Vec<Rate> {
             let [a, b] = model.cables[j].nodes;
             let (wa, wb) = (node_compliance(model, a), node_compliance(model, b));
             let omega = cable_damping(model, j) * (wa + wb);
-            (omega > 0.0).then(|| Rate {
+            (omega > 0.0).then_some(Rate {
                 omega,
                 cause: Cause::CableDamping(j),
                 node: Some(if wa >= wb { a } else { b }),
