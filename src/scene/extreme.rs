@@ -39,14 +39,8 @@ pub fn extreme_scenes() -> Vec<Extreme> {
         make(elastic, "stiff-ground", "ground.stiffness", &|s| {
             s.fixed.clear();
             s.gravity = Some([0.0, 0.0, -9.81]);
-            s.ground = Some(GroundSpec {
-                height: 0.0,
-                normal: [0.0, 0.0, 1.0],
-                stiffness: 1e16,
-                damping: 0.0,
-                friction: 0.0,
-                slip_velocity: 0.01,
-            });
+            // The defaults: at z = 0, no damping, no friction.
+            s.ground = Some(toml::from_str::<GroundSpec>("stiffness = 1e16").expect("a ground"));
         }),
         make(elastic, "tiny-masses", "1e-15 kg", &|s| {
             s.bars.iter_mut().for_each(|b| b.mass = 1e-15)
