@@ -57,7 +57,8 @@ pub fn run() -> Result<(), String> {
                     let text = r.describe(sim.model(), &sim.inputs);
                     text.split(" (").next().unwrap_or_default().to_string()
                 });
-                format!("{kind}: {cause}")
+                // A table cell: `|gravity|` must not end it.
+                format!("{kind}: {}", cause.replace('|', "\\|"))
             }
         };
         let share = (SAMPLE_STEPS / steps).min(1.0);

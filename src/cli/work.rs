@@ -11,8 +11,10 @@ use tensegrity_fmu::Simulation;
 /// Most internal steps a run takes without `--force`.
 pub const MAX_STEPS: f64 = 1e7;
 
-/// Wall time spent measuring the cost of a step before a run, s.
+/// Most wall time spent measuring the cost of a step before a run.
 const PROBE: Duration = Duration::from_millis(20);
+/// Most steps measured.
+const PROBE_STEPS: u32 = 50;
 
 /// A run's predicted work and wall time.
 pub struct Prediction {
@@ -33,7 +35,7 @@ pub fn predict(
 ) -> Result<Prediction, String> {
     let work = sim.predict_work(stop, interval);
     let seconds = sim
-        .seconds_per_step(work.step, PROBE)
+        .seconds_per_step(work.step, PROBE_STEPS, PROBE)
         .map(|s| s * work.steps);
     if work.steps > MAX_STEPS && !force {
         return Err(format!(

@@ -166,21 +166,22 @@ impl Simulation {
         self.short_steps.clone().unwrap_or_default()
     }
 
-    /// Wall time per internal step attempt, s, measured on a copy over about `budget`
-    /// (at least one attempt) with steps of `step`; `None` when the copy fails at once.
-    pub fn seconds_per_step(&self, step: f64, budget: Duration) -> Option<f64> {
+    /// Wall time per internal step attempt, s, measured on a copy with steps of `step`
+    /// over `attempts` attempts or about `budget`, whichever ends first (at least one);
+    /// `None` when the copy fails at once.
+    pub fn seconds_per_step(&self, step: f64, attempts: u32, budget: Duration) -> Option<f64> {
         let mut probe = self.clone();
-        let mut attempts = 0u32;
+        let mut taken = 0u32;
         let started = Instant::now();
-        while attempts == 0 || started.elapsed() < budget {
+        while taken == 0 || (taken < attempts && started.elapsed() < budget) {
             let t = probe.time();
             if probe.attempt(t, step).is_err() {
                 break;
             }
             probe.state.time = t + step;
-            attempts += 1;
+            taken += 1;
         }
-        (attempts > 0).then(|| started.elapsed().as_secs_f64() / f64::from(attempts))
+        (taken > 0).then(|| started.elapsed().as_secs_f64() / f64::from(taken))
     }
 }
 
