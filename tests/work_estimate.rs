@@ -173,3 +173,35 @@ fn the_progress_bar_goes_to_stderr_only() {
     let (_, err) = with_progress(None);
     assert!(!err.contains("ETA"), "{err:?}");
 }
+
+#[test]
+fn a_fixed_step_run_past_the_limit_names_the_step() {
+    // 2 s at 1e-7 s: exactly 2e7 rk4 steps.
+    let csv = temp("fixed.csv");
+    let args = [
+        "simulate",
+        "prism2-elastic",
+        "--method",
+        "rk4",
+        "--step-size",
+        "1e-7",
+    ];
+    let rows = [
+        "--time",
+        "2",
+        "--interval",
+        "0.005",
+        "-o",
+        csv.to_str().unwrap(),
+    ];
+    let (ok, _, err) = run(&[&args[..], &rows].concat());
+    println!("{err}");
+    assert!(!ok);
+    assert!(
+        err.contains("about 2.00e7 internal steps")
+            && err.contains("rk4 takes fixed steps of solver.step_size = 0.0000001 s"),
+        "{err}"
+    );
+    assert!(err.contains("--force"), "{err}");
+    assert!(!csv.exists());
+}
