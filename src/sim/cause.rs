@@ -309,7 +309,7 @@ pub fn node_compliance(model: &Model, n: usize) -> f64 {
 }
 
 /// Cable `j`'s damping, N·s/m (0 without).
-fn cable_damping(model: &Model, j: usize) -> f64 {
+pub fn cable_damping(model: &Model, j: usize) -> f64 {
     match model.cables[j].law {
         CableLaw::Elastic { damping, .. } | CableLaw::RestLengthControlled { damping, .. } => {
             damping.unwrap_or(0.0)
@@ -325,22 +325,6 @@ pub fn load_force(model: &Model, k: usize) -> f64 {
         LoadSpec::Sinusoidal { amplitude, .. } => amplitude,
     };
     Vector3::from(force).norm()
-}
-
-/// The damped cables' decay rates `c (w_a + w_b)`.
-pub fn damping_rates(model: &Model) -> Vec<Rate> {
-    (0..model.cables.len())
-        .filter_map(|j| {
-            let [a, b] = model.cables[j].nodes;
-            let (wa, wb) = (node_compliance(model, a), node_compliance(model, b));
-            let omega = cable_damping(model, j) * (wa + wb);
-            (omega > 0.0).then_some(Rate {
-                omega,
-                cause: Cause::CableDamping(j),
-                node: Some(if wa >= wb { a } else { b }),
-            })
-        })
-        .collect()
 }
 
 /// "node 7 (an end of bars[4], 1 kg, with point_masses[1] of 0.5 kg)".

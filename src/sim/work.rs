@@ -17,6 +17,7 @@ use std::time::{Duration, Instant};
 
 use super::cause::{self, Cause, Rate};
 use super::Simulation;
+use crate::model::Model;
 
 /// dopri5's attempts per second per unit of the stiff rate that holds its step.
 pub const STABLE_ATTEMPTS_PER_RATE: f64 = 0.5;
@@ -90,7 +91,7 @@ impl Simulation {
         let size = cause::size(&self.model);
         let tol = solver.rtol.max(solver.atol / size).clamp(1e-300, 1.0);
         let mut stiff = self.fastest_rates();
-        stiff.extend(cause::damping_rates(&self.model));
+        stiff.extend(damping_rates(&self.model));
         let stiff = stiff
             .into_iter()
             .max_by(|a, b| a.omega.total_cmp(&b.omega))
@@ -201,4 +202,23 @@ fn rows(span: f64, interval: f64, per_row: &dyn Fn(f64) -> f64) -> f64 {
         } else {
             0.0
         }
+}
+
+/// The damped cables' decay rates `c (w_a + w_b)`.
+fn damping_rates(model: &Model) -> Vec<Rate> {
+    (0..model.cables.len())
+        .filter_map(|j| {
+            let [a, b] = model.cables[j].nodes;
+            let (wa, wb) = (
+                cause::node_compliance(model, a),
+                cause::node_compliance(model, b),
+            );
+            let omega = cause::cable_damping(model, j) * (wa + wb);
+            (omega > 0.0).then_some(Rate {
+                omega,
+                cause: Cause::CableDamping(j),
+                node: Some(if wa >= wb { a } else { b }),
+            })
+        })
+        .collect()
 }
