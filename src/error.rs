@@ -79,10 +79,12 @@ pub enum StepError {
         message: String,
     },
     /// One call would take more internal steps than `solver.max_steps` allows.
-    #[error("{what} takes more than solver.max_steps = {max} internal steps (t = {from} s to {to} s); nothing was integrated. Use shorter communication steps or intervals, a larger solver.step_size, or raise solver.max_steps")]
+    #[error("{what} takes more than solver.max_steps = {max} internal steps (t = {from} s to {to} s); nothing was integrated. {fixes}")]
     TooManySteps {
         /// What needs the steps, e.g. "this advance (about 1e9 steps of 1e-12 s)".
         what: String,
+        /// What keeps the steps short, if known, and the fixes.
+        fixes: String,
         /// The cap.
         max: u64,
         /// Start time, s.

@@ -89,3 +89,37 @@ fn a_step_size_far_below_the_time_scale_is_reported() {
     let mut s = Simulation::new(Model::new(&scene).unwrap());
     assert_eq!(s.step_size_problem(), None);
 }
+
+/// The FMU's refusal past `solver.max_steps` under dopri5 names the element that keeps
+/// its steps short and suggests sdirk3.
+#[test]
+fn the_fmu_names_the_stiff_element_when_max_steps_runs_out() {
+    use tensegrity_fmu::fmi::{guid_for, Instance};
+    let scene = tensegrity_fmu::scene::extreme_scenes().remove(0).scene;
+    assert_eq!(scene.name, "stiff-cable");
+    let dir = std::env::temp_dir().join(format!("bounded-work-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let text = scene.to_toml_string();
+    std::fs::write(dir.join("scene.toml"), &text).unwrap();
+    let mut fmu = Instance::instantiate("stiff", &guid_for(&text), &dir, true).unwrap();
+    fmu.setup_experiment(0.0, None).unwrap();
+    fmu.enter_initialization_mode().unwrap();
+    fmu.exit_initialization_mode().unwrap();
+    fmu.drain_messages();
+    let message = fmu.do_step(0.0, 1.0).unwrap_err().message;
+    println!("{message}");
+    assert!(
+        message.starts_with(
+            "fmi2DoStep: this advance with dopri5 takes more than solver.max_steps = 100000"
+        ),
+        "{message}"
+    );
+    assert!(
+        message.contains("the stiffness of cables[4] (elastic, stiffness 5e14 N/m)"),
+        "{message}"
+    );
+    assert!(message.contains("solver.method = \"sdirk3\""), "{message}");
+    // The instance carries on: a step it can afford goes through.
+    fmu.do_step(0.0, 1e-6).unwrap();
+    assert!((fmu.simulation().time() - 1e-6).abs() < 1e-18);
+}

@@ -7,7 +7,7 @@ use std::collections::BTreeSet;
 use std::process::Command;
 
 /// Crates that only the command line, pictures, plots, exports and packaging use.
-const CLI_ONLY: [&str; 16] = [
+const CLI_ONLY: [&str; 18] = [
     "clap",
     "libc",
     "zip",
@@ -24,6 +24,8 @@ const CLI_ONLY: [&str; 16] = [
     "signal-hook",
     "gif",
     "binrw",
+    "indicatif",
+    "console",
 ];
 
 /// The names of the crates `package` depends on (normal edges only), from `cargo tree`.

@@ -6,11 +6,14 @@ mod bench_csv;
 mod bench_effects;
 mod bench_stiff;
 mod bench_threads;
+mod bench_work;
 mod inputs;
 pub mod interrupt;
+mod progress;
 mod render;
 mod report;
 mod simulate;
+mod work;
 
 use std::path::PathBuf;
 
@@ -67,6 +70,9 @@ enum Command {
         /// CSV file (default: <scene name>.csv).
         #[arg(short, long)]
         output: Option<PathBuf>,
+        /// Run even when the run is predicted to take more than 1e7 internal steps.
+        #[arg(long)]
+        force: bool,
     },
     /// Package a scene as an FMI 2.0 co-simulation FMU and print its path.
     Build {
@@ -175,6 +181,9 @@ enum BenchCommand {
         #[arg(long, default_value_t = 5)]
         repeats: usize,
     },
+    /// The internal steps and wall time predicted before a run against those it takes,
+    /// for seven extreme scenes and the shipped ones (1 s, a row every step).
+    Work,
     /// µs per step of large towers evaluated on one thread and on two, in alternation in
     /// one process, with the median ratio of the rounds.
     Threads {
@@ -205,6 +214,7 @@ pub fn run(cli: Cli) -> Result<(), String> {
             rtol,
             atol,
             output,
+            force,
         } => {
             let mut scene = Scene::from_name_or_file(scene.as_deref().unwrap_or(BUILTIN_DEFAULT))
                 .map_err(|e| e.to_string())?;
@@ -224,6 +234,7 @@ pub fn run(cli: Cli) -> Result<(), String> {
                 interval,
                 inputs,
                 output,
+                force,
             };
             simulate::simulate(scene, request)
         }
@@ -259,6 +270,10 @@ pub fn run(cli: Cli) -> Result<(), String> {
             what: Some(BenchCommand::Stiff { repeats }),
             ..
         } => bench_stiff::run(repeats),
+        Command::Bench {
+            what: Some(BenchCommand::Work),
+            ..
+        } => bench_work::run(),
         Command::Bench {
             what: None,
             stages,

@@ -46,6 +46,9 @@ pub struct Request {
     /// Largest node displacement of --mode, m (default: 10 % of the structure's size).
     #[arg(long, value_name = "A", allow_negative_numbers = true)]
     pub amplitude: Option<f64>,
+    /// Run even when the run is predicted to take more than 1e7 internal steps.
+    #[arg(long)]
+    pub force: bool,
 }
 
 /// Default simulated time of an animation, s.
@@ -174,7 +177,7 @@ fn still(scene: &Scene, r: &Request) -> Result<(Frames, usize), String> {
             "--at {at} is outside the run, which spans 0 to {time} s (--time); pass --at between them or a longer --time"
         ));
     }
-    Ok((Frames::from_run(scene, &[at])?, 0))
+    Ok((simulate(scene, &[at], r.force)?, 0))
 }
 
 /// The run of an animation: recorded every 1/fps s from 0 to --time (and at --time), or
@@ -200,5 +203,16 @@ fn series(scene: &Scene, r: &Request) -> Result<Frames, String> {
     if time - times[times.len() - 1] > 1e-9 * interval {
         times.push(time);
     }
-    Frames::from_run(scene, &times)
+    simulate(scene, &times, r.force)
+}
+
+/// The scene's run recorded at `times`, refused when predicted past
+/// [`super::work::MAX_STEPS`] steps without `force`.
+fn simulate(scene: &Scene, times: &[f64], force: bool) -> Result<Frames, String> {
+    let stop = times.last().copied().unwrap_or(0.0);
+    let interval = times.get(1).map_or(stop, |t| t - times[0]);
+    Frames::from_checked_run(scene, times, |sim| {
+        let refused = "render refused, nothing drawn";
+        super::work::predict(sim, stop, interval.max(f64::MIN_POSITIVE), force, refused).map(|_| ())
+    })
 }

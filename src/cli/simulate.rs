@@ -18,6 +18,8 @@ use tensegrity_fmu::{outputs, Simulation, StepError};
 
 use super::inputs::{isclose, InputTable};
 use super::interrupt;
+use super::progress::Progress;
+use super::work;
 
 /// Most rows one `simulate` writes.
 pub const MAX_ROWS: f64 = 1e7;
@@ -36,6 +38,8 @@ pub struct Request {
     pub inputs: Option<PathBuf>,
     /// CSV to write (default: `<scene name>.csv`).
     pub output: Option<PathBuf>,
+    /// Run past [`super::work::MAX_STEPS`] predicted steps.
+    pub force: bool,
 }
 
 /// Runs the scene and writes the CSV; on failure no CSV is left behind. Stopped by Ctrl-C,
@@ -46,6 +50,7 @@ pub fn simulate(scene: Scene, request: Request) -> Result<(), String> {
         interval,
         inputs,
         output,
+        force,
     } = request;
     let model = tensegrity_fmu::analysis::load(&scene).map_err(|e| e.to_string())?;
     let h = model.solver.step_size;
@@ -93,6 +98,9 @@ pub fn simulate(scene: Scene, request: Request) -> Result<(), String> {
     if let Some(why) = sim.accuracy_problem() {
         eprintln!("warning: {why}");
     }
+    let refused = "simulate refused, no CSV written";
+    let predicted = work::predict(&mut sim, time, interval, force, refused)?;
+    let progress = Progress::new(time, predicted.seconds);
     let path = output.unwrap_or_else(|| PathBuf::from(format!("{}.csv", scene.name)));
     let (partial, file) = Partial::create(&path)?;
     // A hidden hook for the tests: a bug (a panic) while a temporary file is open.
@@ -118,10 +126,12 @@ pub fn simulate(scene: Scene, request: Request) -> Result<(), String> {
         evaluate,
         |sim| {
             (written, last) = (written + 1, sim.time());
+            progress.reached(last);
             rows.send_row(sim).map_err(io)
         },
     );
     interrupt::stoppable(false);
+    progress.finish();
     ran?;
     let w = rows.finish().map_err(io)?;
     drop(w.into_inner().map_err(|e| io(e.into_error()))?);

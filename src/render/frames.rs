@@ -89,11 +89,21 @@ impl Frames {
     /// Simulates `scene` with its own solver settings and inputs at their start values,
     /// recording at `times` (increasing, from 0).
     pub fn from_run(scene: &Scene, times: &[f64]) -> Result<Self, String> {
+        Self::from_checked_run(scene, times, |_| Ok(()))
+    }
+
+    /// [`Frames::from_run`], once `check` has accepted the simulation about to run.
+    pub fn from_checked_run(
+        scene: &Scene,
+        times: &[f64],
+        check: impl FnOnce(&mut Simulation) -> Result<(), String>,
+    ) -> Result<Self, String> {
         let model = crate::analysis::load(scene).map_err(|e| e.to_string())?;
         let mut sim = Simulation::new(model);
         if let Some(why) = sim.step_size_problem() {
             return Err(why);
         }
+        check(&mut sim)?;
         Self::record(&mut sim, times)
     }
 

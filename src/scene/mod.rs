@@ -4,6 +4,7 @@
 //! message, a CSV column or an FMU variable uses that numbering.
 
 mod builtin;
+mod extreme;
 pub mod limits;
 mod read;
 mod validate;
@@ -11,6 +12,7 @@ mod validate;
 pub use builtin::{
     builtin, builtin_names, generate, steel_prism_scene, tower_scene, BUILTIN_DEFAULT,
 };
+pub use extreme::{extreme_scenes, Extreme};
 
 use serde::{Deserialize, Serialize};
 use std::path::Path;

@@ -11,6 +11,7 @@ use nalgebra::Vector3;
 
 use crate::dynamics::{self, Inputs, Workspace};
 use crate::model::{CableLaw, Model};
+use crate::scene::LoadSpec;
 
 /// Where a rate comes from.
 #[derive(Debug, Clone, PartialEq)]
@@ -33,6 +34,15 @@ pub enum Cause {
     /// The structure's fastest mode with no cable or contact dominating its stiffness
     /// (bars' constraint forces, many comparable terms).
     Structure,
+    /// A damped cable's extension decaying at `c (w_a + w_b)` (index 0-based).
+    CableDamping(usize),
+    /// Gravity moving the structure over its size: `√(|a| / L)`.
+    Gravity,
+    /// Scripted load `k` (0-based) moving its node over the structure's size: `√(|F| w / L)`.
+    Load(usize),
+    /// Forces unbalanced at the start (a geometry out of equilibrium) moving the structure
+    /// over its size: `√(|a| / L)`.
+    Unbalanced,
 }
 
 /// A rate, 1/s (an angular frequency for an oscillation), with its cause and the node
@@ -195,6 +205,32 @@ impl Rate {
                 "the structure's fastest mode, which no single cable or contact dominates (it \
                  moves {at} most)"
             ),
+            Cause::CableDamping(j) => format!(
+                "the damping of cables[{}], {} N·s/m (its stretch decays at the rate c (w_a + \
+                 w_b) of its ends' compliances)",
+                j + 1,
+                num(cable_damping(model, *j))
+            ),
+            Cause::Gravity => format!(
+                "the gravity, |gravity| = {} m/s² (the time √(L/g) to move the structure's \
+                 size L = {} m)",
+                num(model.gravity.map_or(0.0, |g| g.norm())),
+                num(size(model))
+            ),
+            Cause::Load(k) => format!(
+                "loads[{k1}], {} N on node {} (the time √(L/(F w)) to move the structure's size \
+                 L = {} m; w = {} 1/kg)",
+                num(load_force(model, *k)),
+                model.scene.loads[*k].node(),
+                num(size(model)),
+                num(node_compliance(model, model.scene.loads[*k].node() - 1)),
+                k1 = k + 1
+            ),
+            Cause::Unbalanced => format!(
+                "the forces unbalanced at the start, which accelerate {at} the most (the time \
+                 √(L/a) to move the structure's size L = {} m)",
+                num(size(model))
+            ),
         }
     }
 
@@ -239,9 +275,56 @@ impl Rate {
                     num(slip / g.slip_velocity)
                 ))
             }
-            Cause::Structure => None,
+            Cause::CableDamping(j) => Some(format!(
+                "cables[{}].damping ≤ {} N·s/m",
+                j + 1,
+                num(cable_damping(model, *j) * target / self.omega)
+            )),
+            // The rate grows as the square root of the acceleration.
+            Cause::Gravity => Some(format!(
+                "|gravity| ≤ {} m/s²",
+                num(model.gravity.map_or(0.0, |g| g.norm()) * (target / self.omega).powi(2))
+            )),
+            Cause::Load(k) => Some(format!(
+                "loads[{}] ≤ {} N",
+                k + 1,
+                num(load_force(model, *k) * (target / self.omega).powi(2))
+            )),
+            Cause::Structure | Cause::Unbalanced => None,
         }
     }
+}
+
+/// The structure's size, m: its longest bar (at least 1 mm).
+pub fn size(model: &Model) -> f64 {
+    model.lengths().into_iter().fold(1e-3, f64::max)
+}
+
+/// The compliance `w` of node `n` (0-based), 1/kg: 0 when pinned or not a bar end.
+pub fn node_compliance(model: &Model, n: usize) -> f64 {
+    match model.coords.node_end[n] {
+        Some(e) if !model.pinned[n] => model.inertia[e / 2].w[e % 2][e % 2],
+        _ => 0.0,
+    }
+}
+
+/// Cable `j`'s damping, N·s/m (0 without).
+pub fn cable_damping(model: &Model, j: usize) -> f64 {
+    match model.cables[j].law {
+        CableLaw::Elastic { damping, .. } | CableLaw::RestLengthControlled { damping, .. } => {
+            damping.unwrap_or(0.0)
+        }
+        CableLaw::Controlled { .. } => 0.0,
+    }
+}
+
+/// The largest force of scripted load `k`, N.
+pub fn load_force(model: &Model, k: usize) -> f64 {
+    let force = match model.scene.loads[k] {
+        LoadSpec::Constant { force, .. } | LoadSpec::Step { force, .. } => force,
+        LoadSpec::Sinusoidal { amplitude, .. } => amplitude,
+    };
+    Vector3::from(force).norm()
 }
 
 /// "node 7 (an end of bars[4], 1 kg, with point_masses[1] of 0.5 kg)".

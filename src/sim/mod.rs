@@ -14,9 +14,11 @@ mod cause;
 mod events;
 mod stability;
 mod stepping;
+mod work;
 
 pub use cause::{Cause, Rate};
 pub use stability::stability_limit;
+pub use work::{fixed_steps, Pace, Work, RESOLVING_STEP, STABLE_ATTEMPTS_PER_RATE};
 
 /// The integrated state.
 #[derive(Debug, Clone, PartialEq)]
@@ -78,6 +80,8 @@ pub struct Simulation {
     pub locate_events: bool,
     events: events::Events,
     stability: Stability,
+    /// Why dopri5's steps are short, once a call ran out of `solver.max_steps`.
+    short_steps: Option<String>,
     warnings: Vec<String>,
 }
 
@@ -102,6 +106,7 @@ impl Clone for Simulation {
             locate_events: self.locate_events,
             events: self.events.clone(),
             stability: self.stability.clone(),
+            short_steps: self.short_steps.clone(),
             warnings: self.warnings.clone(),
         }
     }
@@ -181,6 +186,7 @@ impl Simulation {
             locate_events: model.solver.locate_events,
             events: events::Events::new(&model),
             stability: Stability::default(),
+            short_steps: None,
             advance_start: State {
                 time: 0.0,
                 y: y.clone(),

@@ -1,8 +1,9 @@
 //! An estimate of the fastest mode, for the explicit fixed-step methods' stability limit.
 //!
-//! Power iteration on the position Jacobian of the constrained acceleration (by finite
-//! differences, at rest): its largest eigenvalue magnitude is ω²_max. Velocity-dependent
-//! terms (damping, centrifugal) are left out; cables' slack/taut state is the current one.
+//! Power iteration on the position Jacobian of the constrained acceleration (by one-sided
+//! differences, at rest, on the stiffer side): its largest eigenvalue magnitude is ω²_max.
+//! Velocity-dependent terms (damping, centrifugal) are left out; a cable at the edge of
+//! slack counts with its stiffness.
 //! Ground contact, usually inactive when the check runs, adds bounds of its own. Each rate
 //! names its cause (see [`super::cause`]), so the messages can name the key to change.
 
@@ -61,17 +62,7 @@ impl Simulation {
         }
         let q0: Vec<f64> = self.state.y[..half].to_vec();
         let zero = vec![0.0; half];
-        let mut a0 = vec![0.0; half];
         let t = self.state.time;
-        dynamics::accelerations(
-            &self.model,
-            &self.inputs,
-            t,
-            &q0,
-            &zero,
-            &mut self.ws,
-            &mut a0,
-        );
         let scale = self
             .model
             .lengths()
@@ -83,28 +74,40 @@ impl Simulation {
         let mut x: Vec<f64> = (0..half)
             .map(|i| ((i * 7 + 3) % 11) as f64 - 5.0 + 0.5)
             .collect();
+        let mut a0 = vec![0.0; half];
+        dynamics::accelerations(
+            &self.model,
+            &self.inputs,
+            t,
+            &q0,
+            &zero,
+            &mut self.ws,
+            &mut a0,
+        );
         let mut q = vec![0.0; half];
-        let mut a = vec![0.0; half];
+        let (mut ahead, mut behind) = (vec![0.0; half], vec![0.0; half]);
         let mut lambda = 0.0;
         for _ in 0..60 {
             let norm = x.iter().map(|v| v * v).sum::<f64>().sqrt();
             if norm == 0.0 || !norm.is_finite() {
                 break;
             }
-            for ((qi, q0i), xi) in q.iter_mut().zip(&q0).zip(&x) {
-                *qi = q0i + eps * xi / norm;
+            for (a, sign) in [(&mut ahead, 1.0), (&mut behind, -1.0)] {
+                for ((qi, q0i), xi) in q.iter_mut().zip(&q0).zip(&x) {
+                    *qi = q0i + sign * eps * xi / norm;
+                }
+                dynamics::accelerations(&self.model, &self.inputs, t, &q, &zero, &mut self.ws, a);
             }
-            dynamics::accelerations(
-                &self.model,
-                &self.inputs,
-                t,
-                &q,
-                &zero,
-                &mut self.ws,
-                &mut a,
-            );
-            for ((xi, ai), a0i) in x.iter_mut().zip(&a).zip(&a0) {
-                *xi = (ai - a0i) / eps;
+            // The stiffer side: a cable at the edge of slack is stiff one way only, and
+            // bounces on that side.
+            let change = |a: &[f64]| a.iter().zip(&a0).map(|(a, b)| (a - b).powi(2)).sum::<f64>();
+            let (side, sign) = if change(&ahead) >= change(&behind) {
+                (&ahead, 1.0)
+            } else {
+                (&behind, -1.0)
+            };
+            for ((xi, a), b) in x.iter_mut().zip(side).zip(&a0) {
+                *xi = sign * (a - b) / eps;
             }
             lambda = x.iter().map(|v| v * v).sum::<f64>().sqrt();
         }

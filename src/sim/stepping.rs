@@ -83,6 +83,9 @@ impl Simulation {
         if steps.is_nan() || steps > max as f64 {
             return Err(StepError::TooManySteps {
                 what: format!("this advance ({steps:.3e} steps of {dt} s)"),
+                fixes: "Use shorter communication steps or intervals, a larger \
+                        solver.step_size, or raise solver.max_steps"
+                    .into(),
                 max,
                 from: t,
                 to: t_end,
@@ -133,6 +136,7 @@ impl Simulation {
             if attempts == max {
                 return Err(StepError::TooManySteps {
                     what: format!("this advance with {}", self.integrator.name()),
+                    fixes: self.short_steps_note(),
                     max,
                     from: self.advance_start.time,
                     to: t_end,
@@ -222,7 +226,7 @@ impl Simulation {
     }
 
     /// One attempt from `t` with step `h`, then the correction and the finiteness check.
-    fn attempt(&mut self, t: f64, h: f64) -> Result<Outcome, StepError> {
+    pub(super) fn attempt(&mut self, t: f64, h: f64) -> Result<Outcome, StepError> {
         // The state moves: what the last refresh evaluated serves this step's start only.
         let fresh = self.evaluated.take() == Some(t) && self.evaluated_inputs == self.inputs;
         let mut system = System {
