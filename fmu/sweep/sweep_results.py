@@ -63,11 +63,11 @@ class Results:
         except (OSError, ValueError, KeyError, TypeError):
             raise SpecError(str(self.record), "is damaged (not the record this tool writes)",
                             f"restore it, {ANOTHER}") from None
-        for what, label in (("spec", "the spec (its times, outputs or swept values)"),
-                            ("fmu", "the FMU (or the scene that builds it)")):
+        for what, label, name in (("spec", "the spec (its times, outputs or swept values)", "spec"),
+                                  ("fmu", "the FMU (or the scene that builds it)", "FMU")):
             if stored[what] != digests[what]:
                 raise SpecError(str(self.record), f"{label} changed since these results were written",
-                                f"resume with the {what} that started them, {ANOTHER}")
+                                f"resume with the {name} that started them, {ANOTHER}")
 
     def _finished(self, source: Path):
         """The rows already written, checked against this spec's samples; the done set."""

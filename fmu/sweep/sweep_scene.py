@@ -28,7 +28,7 @@ _SEGMENT = re.compile(r"([A-Za-z_]\w*)(?:\[(\d+|\*)\])?\Z")
 def set_scene_key(scene: dict, path: str, value):
     """Sets `prestress.min_tension` or `cables[*].stiffness` (indices from 1, as scene errors
     and FMU names count) in a parsed scene; the key must already be in the scene."""
-    key = f'scene_parameters."{path}"'
+    key = f'scene_parameters."{sweep_spec.key_name(path)}"'
     targets = [scene]
     segments = path.split(".")
     for depth, segment in enumerate(segments):

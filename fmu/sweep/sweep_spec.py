@@ -20,8 +20,10 @@ import numpy as np
 
 
 class SpecError(Exception):
+    """A mistake of the user's, shown as one line: where, what is wrong, how to fix it."""
+
     def __init__(self, key, reason, fix):
-        super().__init__(f"{key}: {reason}; {fix}")
+        super().__init__(" ".join(f"{key}: {reason}; {fix}".split()))
 
 
 KNOWN = {"fmu", "scene", "stop_time", "step", "outputs", "warm_start", "parameters",
@@ -84,6 +86,11 @@ def _show(value, limit=60):
     return text if len(text) <= limit else text[: limit - 3] + "..."
 
 
+def key_name(key):
+    """A key of the user's as the message names it: as written if printable and short."""
+    return key if isinstance(key, str) and key.isprintable() and len(key) <= 60 else _show(key)
+
+
 def _finite_values(key, value):
     """Numbers anywhere in a swept value (a scene list such as gravity too) must be finite."""
     if isinstance(value, float) and not math.isfinite(value):
@@ -100,7 +107,7 @@ def _value_lists(table_key, table):
         raise SpecError(table_key, f"must be a table of names to lists of values, got {_show(table)}",
                         f'write [{table_key}] then lines like "cable[1].stiffness" = [250.0, 500.0]')
     for name, values in table.items():
-        key = f'{table_key}."{name}"'
+        key = f'{table_key}."{key_name(name)}"'
         if not isinstance(values, list) or not values:
             raise SpecError(key, f"must be a non-empty list of values, got {_show(values)}",
                             f'write "{name}" = [value, ...] (one value holds it constant)')
@@ -128,7 +135,7 @@ def parse(raw: dict, path: Path) -> Spec:
     """The spec from the parsed TOML; `path` places relative file names."""
     for key in raw:
         if key not in KNOWN:
-            raise SpecError(_show(key), "unknown key", f"use only {', '.join(sorted(KNOWN))}")
+            raise SpecError(key_name(key), "unknown key", f"use only {', '.join(sorted(KNOWN))}")
     if ("fmu" in raw) == ("scene" in raw):
         raise SpecError("fmu/scene", "exactly one of the two is needed",
                         'write fmu = "tower20.fmu" or scene = "tower20" (a built-in name or a scene file)')
@@ -165,11 +172,11 @@ def parse(raw: dict, path: Path) -> Spec:
         for table, lists in (("parameters", spec.parameters), ("scene_parameters", spec.scene_parameters)):
             for name, values in lists.items():
                 if len(values) != 1:
-                    raise SpecError(f'{table}."{name}"', "a random sweep holds these at one value",
+                    raise SpecError(f'{table}."{key_name(name)}"', "a random sweep holds these at one value",
                                     "give one value, or sweep the variable in [random.ranges] with [low, high]")
         for name in spec.random["ranges"]:
             if name in spec.parameters or name in spec.scene_parameters:
-                raise SpecError(f'random.ranges."{name}"', "is also held in another table", "name it in one table only")
+                raise SpecError(f'random.ranges."{key_name(name)}"', "is also held in another table", "name it in one table only")
     return spec
 
 
@@ -197,7 +204,7 @@ def _random(table):
         raise SpecError("random", f"must be a table, got {_show(table)}", "write [random] with n, seed and [random.ranges]")
     for key in table:
         if key not in ("n", "seed", "ranges"):
-            raise SpecError(f"random.{_show(key)}", "unknown key", "use only n, seed and ranges")
+            raise SpecError(f"random.{key_name(key)}", "unknown key", "use only n, seed and ranges")
     for key in ("n", "seed", "ranges"):
         if key not in table:
             raise SpecError(f"random.{key}", "missing",
@@ -209,7 +216,7 @@ def _random(table):
                             f"write {key} = 20")
     ranges = {}
     for name, bounds in _value_lists("random.ranges", table["ranges"]).items():
-        key = f'random.ranges."{name}"'
+        key = f'random.ranges."{key_name(name)}"'
         if len(bounds) != 2:
             raise SpecError(key, f"must be [low, high], got {_show(bounds)}", f'write "{name}" = [250.0, 1000.0]')
         low, high = (_number(key, b, positive=False) for b in bounds)
@@ -255,7 +262,7 @@ def resolve(spec: Spec, md):
         tables.append(("random.ranges", spec.random["ranges"]))
     for table, lists in tables:
         for name, values in lists.items():
-            key = f'{table}."{name}"'
+            key = f'{table}."{key_name(name)}"'
             rx = _pattern(name)
             matches = [n for n in variables if rx.match(n)]
             if not matches:
@@ -292,18 +299,21 @@ def _check_settable(key, v, values, warm_start):
                             {"Real": "write numbers, e.g. 500.0", "Integer": "write integers, e.g. 1",
                              "Boolean": "write true or false"}[v.type])
         if v.type != "Boolean" and not low <= value <= high:
-            raise SpecError(key, f"{v.name} = {_show(value)} is outside its range [{low:g}, {high:g}]"
-                            f" ({'the FMU' + chr(39) + 's model description' if (v.min or v.max) else 'a 32-bit fmi2Integer'})",
+            source = "from the model description" if v.min is not None or v.max is not None else "a 32-bit fmi2Integer"
+            raise SpecError(key, f"{v.name} = {_show(value)} is outside its range [{low}, {high}] ({source})",
                             "give values in that range")
 
 
 def _range(v):
     """The values a variable takes: its model description's min/max, within 32 bits for an Integer."""
-    low, high = (-math.inf, math.inf) if v.type == "Real" else INT32
+    if v.type == "Real":
+        low, high, number = -math.inf, math.inf, float
+    else:
+        (low, high), number = INT32, int
     if v.min is not None:
-        low = max(low, float(v.min))
+        low = max(low, number(v.min))
     if v.max is not None:
-        high = min(high, float(v.max))
+        high = min(high, number(v.max))
     return low, high
 
 
