@@ -17,17 +17,11 @@ import sys
 import time
 from pathlib import Path
 
-from distributed import Client, LocalCluster, as_completed
-from fmpy import read_model_description
-from tqdm import tqdm
-
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE))  # when imported from elsewhere (tests, the benchmark)
 
-import sweep_plot  # noqa: E402
 import sweep_scene  # noqa: E402
 import sweep_spec  # noqa: E402
-import sweep_worker  # noqa: E402
 from sweep_results import Results  # noqa: E402
 from sweep_spec import SpecError  # noqa: E402
 
@@ -37,7 +31,13 @@ IN_FLIGHT_PER_WORKER = 8  # tasks submitted ahead per worker: enough to keep eac
 MAX_WORKERS = 256  # local worker processes
 
 
+# Dask, fmpy, tqdm and matplotlib are imported where they are used: a spec's mistake is
+# reported in a fraction of the seconds their imports take.
+
+
 def connect(workers, scheduler):
+    from distributed import Client, LocalCluster
+
     if scheduler:
         try:
             client = Client(scheduler, timeout=WORKER_WAIT)
@@ -93,6 +93,8 @@ def run(spec_path, out, workers=2, scheduler=None, resume=False, log=print, forc
     if not complete:  # only a stop on the way leaves samples without a row
         raise SpecError(str(results.progress), f"{len(results.done)} of {runs} samples done",
                         "run again with --resume to finish the others")
+    import sweep_plot
+
     sweep_plot.summary(out / "results.csv", spec.swept(), spec.outputs, out / "summary.png")
     log(f"{stats['ran']} samples run ({stats['ok']} ok, {stats['ran'] - stats['ok']} failed) "
         f"in {stats['seconds']:.2f} s: {stats['ran'] / max(stats['seconds'], 1e-9):.2f} samples/s "
@@ -102,6 +104,8 @@ def run(spec_path, out, workers=2, scheduler=None, resume=False, log=print, forc
 
 
 def _model_description(spec, archive):
+    from fmpy import read_model_description
+
     where = str(spec.fmu) if spec.fmu else "the scene's FMU"
     try:
         md = read_model_description(io.BytesIO(archive))
@@ -115,6 +119,11 @@ def _model_description(spec, archive):
 
 
 def _run_on(client, spec, samples, variants, archives, todo, results):
+    from distributed import as_completed
+    from tqdm import tqdm
+
+    import sweep_worker
+
     client.upload_file(str(HERE / "sweep_worker.py"))  # remote workers need no checkout
     client.register_plugin(sweep_worker.FmuPlugin(archives), name=sweep_worker.PLUGIN)
     n_workers = len(client.scheduler_info()["workers"])

@@ -96,7 +96,7 @@ def scene_data(scene: str, cli: Path) -> dict:
         raise SpecError("scene", f"the CLI {cli} cannot run ({e.strerror})",
                         "build it with `cargo build --release --workspace`") from None
     if res.returncode != 0:
-        raise SpecError("scene", " ".join(res.stderr.split()).removeprefix("error: "),
+        raise SpecError("scene", cli_error(res.stderr),
                         "name a built-in scene (`tensegrity-fmu scene` lists them) or a .toml/.json file")
     return tomllib.loads(res.stdout)
 
@@ -163,11 +163,17 @@ def _build(base, values, folder, archives, cli):
             raise SpecError("scene", f"the CLI {cli} cannot run ({e.strerror})",
                             "build it with `cargo build --release --workspace`") from None
         if res.returncode != 0:  # this variant's samples become error rows
-            return BuildError(" ".join(res.stderr.split()).removeprefix("error: "))
+            return BuildError(cli_error(res.stderr))
     data = fmu.read_bytes()
     key = hashlib.sha256(data).hexdigest()[:16]
     archives[key] = data
     return key
+
+
+def cli_error(stderr: str) -> str:
+    """The CLI's error line (notes it prints before it left out)."""
+    errors = [line for line in stderr.splitlines() if line.startswith("error: ")]
+    return " ".join((errors[-1] if errors else stderr).split()).removeprefix("error: ")
 
 
 class BuildError(str):
