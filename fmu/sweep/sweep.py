@@ -13,6 +13,7 @@ import hashlib
 import io
 import json
 import logging
+import signal
 import sys
 import time
 from pathlib import Path
@@ -51,8 +52,15 @@ def connect(workers, scheduler):
             raise SpecError("--scheduler", f"no worker joined {scheduler} within {WORKER_WAIT} s",
                             f"start one with `dask worker {scheduler}`") from None
         return client, None
-    cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
-                           dashboard_address=None, silence_logs=logging.ERROR)
+    # The workers ignore Ctrl-C (it reaches the whole process group): this process stops
+    # them when it closes the cluster, instead of each printing its own traceback.
+    previous = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    try:
+        # Dask's own log stays quiet: a lost worker shows in its sample's status.
+        cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
+                               dashboard_address=None, silence_logs=logging.CRITICAL)
+    finally:
+        signal.signal(signal.SIGINT, previous)
     return Client(cluster), cluster
 
 
@@ -171,6 +179,10 @@ def _run_on(client, spec, samples, variants, archives, todo, results):
     return {"ran": len(todo), "ok": ok, "seconds": seconds, "instances": len(instances), "workers": n_workers}
 
 
+def _interrupt(_signal, _frame):
+    raise KeyboardInterrupt
+
+
 class _Parser(argparse.ArgumentParser):
     def error(self, message):  # one line, not the usage block
         self.exit(2, f"error: {message}; see --help\n")
@@ -190,6 +202,8 @@ def main(argv=None):
     args = parser.parse_args(argv)
     if not 1 <= args.workers <= MAX_WORKERS:
         parser.error(f"--workers must be from 1 to {MAX_WORKERS}")
+    for stop in (signal.SIGTERM, signal.SIGHUP):  # as Ctrl-C: close the cluster, keep progress.csv
+        signal.signal(stop, _interrupt)
     try:
         run(args.spec, args.output, args.workers, args.scheduler, args.resume, force=args.force)
     except SpecError as e:

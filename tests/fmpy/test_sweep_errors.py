@@ -12,8 +12,10 @@ import math
 import os
 import re
 import shutil
+import signal
 import subprocess
 import sys
+import time
 import tracemalloc
 import zipfile
 from pathlib import Path
@@ -308,3 +310,41 @@ def test_leftovers_of_a_killed_sweep_are_removed_by_the_next(finished, tmp_path,
     assert sweep_main([str(tmp_path / "spec.toml"), "-o", str(out), "--resume"]) == 0, capsys.readouterr().err
     assert sorted(p.name for p in out.iterdir()) == [".mine.tmp", "results.csv", "summary.png", "sweep.json"]
     assert math.isfinite(float(next(csv.DictReader(open(out / "results.csv")))["node[7].x.final"]))
+
+
+@pytest.mark.parametrize("stop", [signal.SIGINT, signal.SIGTERM])
+def test_ctrl_c_or_sigterm_stops_cleanly_and_the_sweep_resumes(fmus, tmp_path, stop):
+    """A Ctrl-C reaches the sweep and its workers (the terminal's process group): one line,
+    exit 130, no process left, whole rows kept in progress.csv; --resume finishes them."""
+    tower = fmus.builtin("tower20")
+    n = 40
+    text = (f'fmu = "{tower.path}"\nstop_time = 0.4\nstep = 0.02\noutputs = ["node[61].x"]\n'
+            f'[parameters]\n"node[61].fx" = {[float(i) for i in range(n)]}\n')
+    (tmp_path / "spec.toml").write_text(text)
+    progress = tmp_path / "out" / "progress.csv"
+    proc = subprocess.Popen([sys.executable, str(SWEEP), str(tmp_path / "spec.toml"), "-o", str(tmp_path / "out")],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, start_new_session=True)
+    deadline = time.monotonic() + 60
+    while time.monotonic() < deadline and (not progress.exists() or progress.read_text().count("\n") < 4):
+        time.sleep(0.01)
+    os.killpg(proc.pid, stop)
+    _, err = proc.communicate(timeout=60)
+    assert proc.returncode == 130
+    assert err == (f"error: interrupted; the finished rows are in {progress}, run again with --resume to finish\n")
+    deadline = time.monotonic() + 10
+    while time.monotonic() < deadline:
+        try:
+            os.killpg(proc.pid, 0)
+        except ProcessLookupError:
+            break
+        time.sleep(0.05)
+    else:
+        os.killpg(proc.pid, signal.SIGKILL)
+        pytest.fail("processes of the sweep outlived it")
+    lines = progress.read_text().splitlines()
+    assert 3 <= len(lines) - 1 < n and not (tmp_path / "out" / "results.csv").exists()
+    res = command(tmp_path, text, "--resume")
+    assert res.returncode == 0, res.stderr
+    with open(tmp_path / "out" / "results.csv", newline="") as f:
+        got = list(csv.DictReader(f))
+    assert [int(r["sample"]) for r in got] == list(range(n)) and all(r["status"] == "ok" for r in got)

@@ -33,7 +33,7 @@ from sweep_spec import SpecError  # noqa: E402
 
 EXAMPLES = int(os.environ.get("SWEEP_FUZZ_EXAMPLES", "200"))
 # A hang detector, not a speed check: a spec is read in well under a millisecond.
-FUZZ = settings(max_examples=EXAMPLES, deadline=10_000, suppress_health_check=[HealthCheck.too_slow],
+FUZZ = settings(max_examples=EXAMPLES, deadline=10_000, suppress_health_check=[HealthCheck.too_slow], database=None,
                 derandomize=EXAMPLES <= 200)
 
 NAMES = ["node[7].fx", "node[7].x", "cable[*].stiffness", "cable[1].stiffness", "cable[99].stiffness",
