@@ -86,9 +86,15 @@ def scene_data(scene: str, cli: Path) -> dict:
                             "fix the JSON at that place") from None
         except tomllib.TOMLDecodeError as e:
             raise SpecError("scene", f"{path} is not valid TOML ({e})", "fix the TOML at that line") from None
+        except RecursionError:
+            raise SpecError("scene", f"{path} nests arrays or objects too deeply to read",
+                            "write a scene (docs/scenes.md)") from None
         if not isinstance(data, dict):
             raise SpecError("scene", f"{path} holds a {type(data).__name__}, not a scene table",
                             "write the scene as one object of keys (see docs/scenes.md)")
+        if _depth(data) > MAX_SCENE_DEPTH:
+            raise SpecError("scene", f"{path} nests arrays or objects more than {MAX_SCENE_DEPTH} deep",
+                            "write a scene (docs/scenes.md)")
         return data
     try:
         res = subprocess.run([str(cli), "scene", scene], capture_output=True, text=True)
@@ -99,6 +105,21 @@ def scene_data(scene: str, cli: Path) -> dict:
         raise SpecError("scene", cli_error(res.stderr),
                         "name a built-in scene (`tensegrity-fmu scene` lists them) or a .toml/.json file")
     return tomllib.loads(res.stdout)
+
+
+MAX_SCENE_DEPTH = 16  # a scene nests 3 deep ([[cables]] of tables of lists)
+
+
+def _depth(data) -> int:
+    """How deeply lists and tables nest, counted without recursion."""
+    deepest, stack = 0, [(data, 1)]
+    while stack:
+        node, depth = stack.pop()
+        deepest = max(deepest, depth)
+        if depth <= MAX_SCENE_DEPTH:
+            children = node.values() if isinstance(node, dict) else node if isinstance(node, list) else ()
+            stack.extend((child, depth + 1) for child in children if isinstance(child, (dict, list)))
+    return deepest
 
 
 def variant(spec, sample) -> str:

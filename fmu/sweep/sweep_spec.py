@@ -91,15 +91,20 @@ def key_name(key):
     return key if isinstance(key, str) and key.isprintable() and len(key) <= 60 else _show(key)
 
 
-def _finite_values(key, value):
+MAX_DEPTH = 8  # lists in lists of a swept value (a scene's nodes are 2)
+
+
+def _finite_values(key, value, depth=0):
     """Numbers anywhere in a swept value (a scene list such as gravity too) must be finite."""
     if isinstance(value, float) and not math.isfinite(value):
         raise SpecError(key, f"holds {value!r}", "give finite numbers")
     if isinstance(value, dict):
         raise SpecError(key, f"holds a table {_show(value)}", "give numbers, true/false, strings or lists of them")
     if isinstance(value, list):
+        if depth == MAX_DEPTH:
+            raise SpecError(key, f"nests lists more than {MAX_DEPTH} deep", "give numbers or lists of numbers")
         for item in value:
-            _finite_values(key, item)
+            _finite_values(key, item, depth + 1)
 
 
 def _value_lists(table_key, table):
@@ -128,6 +133,8 @@ def load(path) -> Spec:
         raise SpecError(str(path), f"cannot be read ({e.strerror})", "give a readable sweep spec (.toml)") from None
     except tomllib.TOMLDecodeError as e:
         raise SpecError(str(path), f"not valid TOML ({e})", "fix the TOML syntax at that line") from None
+    except RecursionError:
+        raise SpecError(str(path), "nests arrays or tables too deeply to read", "write a sweep spec (docs/sweeps.md)") from None
     return parse(raw, path)
 
 

@@ -67,6 +67,21 @@ def test_a_missing_spec_file_a_directory_and_binary_junk(tmp_path, capsys):
     (tmp_path / "junk.toml").write_bytes(b"\xff\xfe\x00stop")
     assert sweep_main([str(tmp_path / "junk.toml"), "-o", str(tmp_path / "out")]) == 2
     assert "not UTF-8 text (byte 0)" in capsys.readouterr().err
+    (tmp_path / "deep.toml").write_text("a = " + "[" * 100_000 + "]" * 100_000)
+    assert sweep_main([str(tmp_path / "deep.toml"), "-o", str(tmp_path / "out")]) == 2
+    assert "deep.toml: nests arrays or tables too deeply to read" in capsys.readouterr().err
+    (tmp_path / "deep2.toml").write_text('fmu = "x.fmu"\n' + TOP + '[parameters]\n"a" = ' + "[" * 300 + "]" * 300)
+    assert sweep_main([str(tmp_path / "deep2.toml"), "-o", str(tmp_path / "out")]) == 2
+    assert 'parameters."a": nests lists more than 8 deep' in capsys.readouterr().err
+
+
+def test_an_output_folder_that_cannot_be_made(elastic, tmp_path, capsys):
+    (tmp_path / "file").write_text("")
+    for out in (tmp_path / "file", tmp_path / "file" / "sub"):
+        (tmp_path / "spec.toml").write_text(f'fmu = "{elastic.path}"\n{TOP}')
+        assert sweep_main([str(tmp_path / "spec.toml"), "-o", str(out)]) == 2
+        err = capsys.readouterr().err
+        assert err.startswith(f"error: -o: cannot make the folder {out} (") and err.count("\n") == 1, err
 
 
 @pytest.mark.parametrize("name, content, reason", [
@@ -74,6 +89,8 @@ def test_a_missing_spec_file_a_directory_and_binary_junk(tmp_path, capsys):
     ("bad.json", '{"name": "x", "nodes": [[0, 0, 0],]}', "is not valid JSON (line 1, column 35"),
     ("list.json", "[1, 2]", "holds a list, not a scene table"),
     ("bad.toml", "name = \n", "is not valid TOML"),
+    ("deep.json", "[" * 100_000 + "]" * 100_000, "nests arrays or objects too deeply to read"),
+    ("deeper.json", '{"name": "x", "a": ' + "[" * 500 + "]" * 500 + "}", "nests arrays or objects more than 16 deep"),
 ])
 def test_a_scene_file_missing_or_malformed(tmp_path, capsys, name, content, reason):
     if content is not None:

@@ -13,6 +13,7 @@ CI runs a few hundred examples; a long run sets SWEEP_FUZZ_EXAMPLES:
 
 import copy
 import dataclasses
+import functools
 import os
 import subprocess
 import sys
@@ -50,8 +51,9 @@ leaf = st.one_of(
     st.text(max_size=12),
     st.sampled_from(PATHS + NAMES),
 )
+deep = st.integers(1, 300).map(lambda depth: functools.reduce(lambda x, _: [x], range(depth), 1.0))
 junk = st.recursive(leaf, lambda inner: st.lists(inner, max_size=4) | st.dictionaries(st.text(max_size=6), inner, max_size=3),
-                    max_leaves=12)
+                    max_leaves=12) | deep
 value_lists = st.lists(st.one_of(leaf, junk), max_size=6) | junk
 
 
