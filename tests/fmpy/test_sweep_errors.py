@@ -365,3 +365,21 @@ def test_ctrl_c_or_sigterm_stops_cleanly_and_the_sweep_resumes(fmus, tmp_path, s
     with open(tmp_path / "out" / "results.csv", newline="") as f:
         got = list(csv.DictReader(f))
     assert [int(r["sample"]) for r in got] == list(range(n)) and all(r["status"] == "ok" for r in got)
+
+
+def test_the_summary_plots_columns_that_hold_no_numbers(tmp_path):
+    """Booleans sit at false = 0, true = 1; a scene list or name at 0, 1, ... in the order met."""
+    import sweep_plot
+
+    assert sweep_plot._axis(["true", "false", "true"]) == ({"false": 0.0, "true": 1.0}, ["false", "true"])
+    gravity = ["[0.0, 0.0, -9.81]", "[0.0, 0.0, 0.0]"]
+    assert sweep_plot._axis(gravity) == ({gravity[0]: 0.0, gravity[1]: 1.0}, gravity)
+    assert sweep_plot._axis(["2.5", "1e3"]) == ({"2.5": 2.5, "1e3": 1000.0}, None)
+    results = tmp_path / "results.csv"
+    with open(results, "w", newline="") as f:
+        w = csv.writer(f)
+        w.writerow(["sample", "gravity", "flag", "status", "x.final", "x.min", "x.max"])
+        for i, (g, flag) in enumerate([(g, b) for g in gravity for b in ("true", "false")]):
+            w.writerow([i, g, flag, "ok" if i < 3 else "failed: no", *([i, i - 1, i + 1] if i < 3 else ["", "", ""])])
+    sweep_plot.summary(results, ["gravity", "flag"], ["x"], tmp_path / "summary.png")
+    assert (tmp_path / "summary.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
