@@ -152,6 +152,11 @@ def test_random_n_of_1e9_is_refused_and_force_lets_it_through(tmp_path, capsys):
     u = np.random.default_rng(1).random(3)
     assert [samples[i]["node[7].fx"] for i in range(3)] == [float(x) for x in u]
     assert 0.0 <= samples[10**9 - 1]["node[7].fx"] < 1.0
+    # with two ranges, draw i is row i of the (n, 2) matrix a materialised sweep would draw
+    (tmp_path / "two.toml").write_text(text.replace("n = 1000000000", "n = 50") + '"node[7].fy" = [-4.0, 4.0]\n')
+    two = sweep_spec.samples(sweep_spec.load(tmp_path / "two.toml"))
+    u = np.random.default_rng(1).random((50, 2))
+    assert [(s["node[7].fx"], s["node[7].fy"]) for s in two] == [(float(a), -4.0 + 8.0 * float(b)) for a, b in u]
 
 
 def test_results_past_2_gb_are_refused_even_with_few_runs(tmp_path, capsys):
