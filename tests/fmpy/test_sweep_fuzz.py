@@ -7,8 +7,8 @@ In-process: each example runs every check that `sweep.run` makes before any work
 description, the first and last samples), with no subprocess per example. A few specs
 run as the command does, to show exit code 2 and one line on the terminal.
 
-CI runs a few hundred examples; a long run sets SWEEP_FUZZ_EXAMPLES:
-    SWEEP_FUZZ_EXAMPLES=100000 .venv/bin/python -m pytest -q tests/fmpy/test_sweep_fuzz.py
+CI runs a few hundred examples; a long run sets SWEEP_FUZZ_EXAMPLES and prints its figures:
+    SWEEP_FUZZ_EXAMPLES=100000 .venv/bin/python -m pytest -q -s tests/fmpy/test_sweep_fuzz.py -k any_spec_is
 """
 
 import copy
@@ -17,6 +17,7 @@ import functools
 import os
 import subprocess
 import sys
+import time
 import tomllib
 from pathlib import Path
 
@@ -112,6 +113,19 @@ def context(fmus):
     return elastic.md, tomllib.loads(elastic.scene_text)
 
 
+STATS = {"specs": 0, "accepted": 0, "seconds": 0.0, "slowest": 0.0}
+
+
+@pytest.fixture(scope="module", autouse=True)
+def figures():
+    """A long run prints its figures (with -s): specs, accepted, time per spec."""
+    yield
+    if EXAMPLES > 200 and STATS["specs"]:
+        print(f"\n{STATS['specs']} specs: {STATS['accepted']} accepted, {STATS['specs'] - STATS['accepted']} "
+              f"refused in one line; checks {STATS['seconds'] / STATS['specs'] * 1e6:.0f} µs per spec "
+              f"on average, slowest {STATS['slowest'] * 1e3:.1f} ms")
+
+
 def validate(raw, md, scene):
     """Every check sweep.run makes before work starts, in its order; returns the spec."""
     spec = sweep_spec.parse(raw, Path("/nonexistent/spec.toml"))
@@ -142,10 +156,16 @@ def one_line(error):
 @given(raw=spec_dicts())
 def test_any_spec_is_accepted_or_refused_in_one_line(context, raw):
     md, scene = context
+    started = time.perf_counter()
     try:
         validate(raw, md, scene)
+        STATS["accepted"] += 1
     except SpecError as e:
         one_line(e)
+    seconds = time.perf_counter() - started
+    STATS["specs"] += 1
+    STATS["seconds"] += seconds
+    STATS["slowest"] = max(STATS["slowest"], seconds)
 
 
 @FUZZ
