@@ -62,9 +62,12 @@ def table(keys):
     return st.dictionaries(st.sampled_from(keys) | st.text(max_size=12), value_lists, max_size=4) | junk
 
 
-def mostly(valid, bad=junk):
-    """Usually a valid value, so that examples get past the first check and reach the later ones."""
-    return st.integers(0, 7).flatmap(lambda i: bad if i == 0 else valid)
+ONE_IN_8 = st.integers(0, 7)
+
+
+def pick(draw, valid, bad=junk):
+    """Usually a valid value, so that examples get past the first checks and reach the later ones."""
+    return draw(bad if draw(ONE_IN_8) == 0 else valid)
 
 
 OUTPUTS = ["node[7].x", "node[7].z", "cable[1].tension"]
@@ -73,12 +76,13 @@ SETTABLE = {"node[7].fx": st.floats(-10, 10), "cable[*].stiffness": st.floats(1,
             "solver.correction": st.booleans(), "solver.rtol": st.floats(0, 1), "node[7].x": st.floats(-1, 1)}
 SCENE_VALUES = {"prestress.min_tension": st.floats(0, 50), "cables[*].stiffness": st.floats(-1, 1e4),
                 "name": st.sampled_from(PATHS) | st.text(max_size=8), "gravity": st.lists(st.floats(-10, 10), max_size=4)}
+LISTS = {n: st.lists(v, min_size=1, max_size=12) for n, v in {**SETTABLE, **SCENE_VALUES}.items()}
+RANGES = st.dictionaries(st.sampled_from(NAMES), st.tuples(st.floats(-10, 0), st.floats(1e-3, 10)).map(list),
+                         min_size=1, max_size=2)
 
 
-def lists_of(values):
-    return st.dictionaries(st.sampled_from(sorted(values)), st.just(None), max_size=3).flatmap(
-        lambda names: st.fixed_dictionaries({n: mostly(st.lists(values[n], min_size=1, max_size=12), value_lists)
-                                             for n in names}))
+def lists_of(draw, names):
+    return {n: pick(draw, LISTS[n], value_lists) for n in draw(st.sets(st.sampled_from(sorted(names)), max_size=3))}
 
 
 @st.composite
@@ -87,21 +91,19 @@ def spec_dicts(draw):
     if draw(st.integers(0, 9)) == 0:
         return draw(st.dictionaries(st.text(max_size=10) | st.sampled_from(sorted(sweep_spec.KNOWN)), junk, max_size=5))
     scene = draw(st.booleans())
-    raw = {"scene": draw(mostly(st.just("prism2-elastic")))} if scene else {"fmu": draw(mostly(st.just("x.fmu")))}
-    raw["stop_time"] = draw(mostly(st.floats(1e-3, 1e3)))
-    fraction = st.floats(1e-9, 1.0).map(lambda f: f * raw["stop_time"] if isinstance(raw["stop_time"], float) else f)
-    raw["step"] = draw(mostly(fraction))
-    raw["outputs"] = draw(mostly(st.lists(st.sampled_from(OUTPUTS), min_size=1, max_size=3), st.lists(st.sampled_from(NAMES))))
+    raw = {"scene": pick(draw, st.just("prism2-elastic"))} if scene else {"fmu": pick(draw, st.just("x.fmu"))}
+    raw["stop_time"] = pick(draw, st.floats(1e-3, 1e3))
+    fraction = draw(st.floats(1e-9, 1.0))
+    raw["step"] = pick(draw, st.just(fraction * raw["stop_time"] if isinstance(raw["stop_time"], float) else fraction))
+    raw["outputs"] = pick(draw, st.lists(st.sampled_from(OUTPUTS), min_size=1, max_size=3), st.lists(st.sampled_from(NAMES)))
     if draw(st.booleans()):
-        raw["warm_start"] = draw(mostly(st.floats(1e-3, 1e3)))
-    raw["parameters"] = draw(mostly(lists_of(SETTABLE), table(NAMES)))
+        raw["warm_start"] = pick(draw, st.floats(1e-3, 1e3))
+    raw["parameters"] = lists_of(draw, SETTABLE) if draw(ONE_IN_8) else draw(table(NAMES))
     if scene and draw(st.booleans()):
-        raw["scene_parameters"] = draw(mostly(lists_of(SCENE_VALUES), table(SCENE_KEYS)))
+        raw["scene_parameters"] = lists_of(draw, SCENE_VALUES) if draw(ONE_IN_8) else draw(table(SCENE_KEYS))
     if draw(st.integers(0, 3)) == 0:
-        raw["random"] = draw(mostly(st.fixed_dictionaries({
-            "n": mostly(st.integers(1, 10**12), leaf), "seed": mostly(st.integers(0, 2**63 - 1), leaf),
-            "ranges": mostly(st.dictionaries(st.sampled_from(NAMES), st.tuples(st.floats(-10, 0), st.floats(1e-3, 10)).map(list),
-                                             min_size=1, max_size=2), table(NAMES))})))
+        raw["random"] = {"n": pick(draw, st.integers(1, 10**12), leaf), "seed": pick(draw, st.integers(0, 2**63 - 1), leaf),
+                         "ranges": pick(draw, RANGES, table(NAMES))} if draw(ONE_IN_8) else draw(junk)
     for key in draw(st.lists(st.sampled_from(sorted(sweep_spec.KNOWN) + ["extra"]), max_size=1)):
         raw[key] = draw(junk)  # one part replaced by junk
     return raw
