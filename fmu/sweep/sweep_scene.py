@@ -7,15 +7,19 @@ while its JSON reader (serde_json without `float_roundtrip`) can be one ulp off.
 """
 
 import copy
+import dataclasses
 import hashlib
+import io
 import json
 import re
 import subprocess
 import tomllib
+import zipfile
 from pathlib import Path
 
+import sweep_files
 import sweep_spec
-from sweep_spec import SpecError
+from sweep_spec import SpecError, check_scene_name
 
 
 _SEGMENT = re.compile(r"([A-Za-z_]\w*)(?:\[(\d+|\*)\])?\Z")
@@ -24,7 +28,7 @@ _SEGMENT = re.compile(r"([A-Za-z_]\w*)(?:\[(\d+|\*)\])?\Z")
 def set_scene_key(scene: dict, path: str, value):
     """Sets `prestress.min_tension` or `cables[*].stiffness` (indices from 1, as scene errors
     and FMU names count) in a parsed scene; the key must already be in the scene."""
-    key = f'scene_parameters."{path}"'
+    key = f'scene_parameters."{sweep_spec.key_name(path)}"'
     targets = [scene]
     segments = path.split(".")
     for depth, segment in enumerate(segments):
@@ -67,38 +71,99 @@ def _set_leaf(key, node, name, value):
 def scene_data(scene: str, cli: Path) -> dict:
     """A scene file (TOML or JSON) or a built-in name (printed by `tensegrity-fmu scene`)."""
     path = Path(scene)
-    if path.suffix == ".json":
-        return json.loads(path.read_text())
-    if path.suffix == ".toml":
-        return tomllib.loads(path.read_text())
-    res = subprocess.run([str(cli), "scene", scene], capture_output=True, text=True)
+    if path.suffix in (".json", ".toml"):
+        try:
+            text = path.read_text(encoding="utf-8")
+            data = json.loads(text) if path.suffix == ".json" else tomllib.loads(text)
+        except FileNotFoundError:
+            raise SpecError("scene", f"no such file {path}", "give the path of a scene file (relative to the spec)") from None
+        except UnicodeDecodeError as e:
+            raise SpecError("scene", f"{path} is not UTF-8 text (byte {e.start})", "give a scene file in UTF-8") from None
+        except OSError as e:
+            raise SpecError("scene", f"{path} cannot be read ({e.strerror})", "give a readable scene file") from None
+        except json.JSONDecodeError as e:
+            raise SpecError("scene", f"{path} is not valid JSON (line {e.lineno}, column {e.colno}: {e.msg})",
+                            "fix the JSON at that place") from None
+        except tomllib.TOMLDecodeError as e:
+            raise SpecError("scene", f"{path} is not valid TOML ({e})", "fix the TOML at that line") from None
+        except RecursionError:
+            raise SpecError("scene", f"{path} nests arrays or objects too deeply to read",
+                            "write a scene (docs/scenes.md)") from None
+        if not isinstance(data, dict):
+            raise SpecError("scene", f"{path} holds a {type(data).__name__}, not a scene table",
+                            "write the scene as one object of keys (see docs/scenes.md)")
+        if _depth(data) > MAX_SCENE_DEPTH:
+            raise SpecError("scene", f"{path} nests arrays or objects more than {MAX_SCENE_DEPTH} deep",
+                            "write a scene (docs/scenes.md)")
+        return data
+    try:
+        res = subprocess.run([str(cli), "scene", scene], capture_output=True, text=True)
+    except OSError as e:
+        raise SpecError("scene", f"the CLI {cli} cannot run ({e.strerror})",
+                        "build it with `cargo build --release --workspace`") from None
     if res.returncode != 0:
-        raise SpecError("scene", res.stderr.strip().removeprefix("error: "),
+        raise SpecError("scene", cli_error(res.stderr),
                         "name a built-in scene (`tensegrity-fmu scene` lists them) or a .toml/.json file")
     return tomllib.loads(res.stdout)
 
 
-def build_variants(spec, samples, out: Path, cli: Path):
-    """The FMU of each sample: spec.fmu, or the scene with the sample's scene_parameters,
-    built once per distinct variant into DIR/fmus/ (kept, so a resumed sweep rebuilds nothing).
+MAX_SCENE_DEPTH = 16  # a scene nests 3 deep ([[cables]] of tables of lists)
 
-    Returns ({key: fmu bytes}, [key or build error per sample])."""
+
+def _depth(data) -> int:
+    """How deeply lists and tables nest, counted without recursion."""
+    deepest, stack = 0, [(data, 1)]
+    while stack:
+        node, depth = stack.pop()
+        deepest = max(deepest, depth)
+        if depth <= MAX_SCENE_DEPTH:
+            children = node.values() if isinstance(node, dict) else node if isinstance(node, list) else ()
+            stack.extend((child, depth + 1) for child in children if isinstance(child, (dict, list)))
+    return deepest
+
+
+def variant(spec, sample) -> str:
+    """The scene values of a sample as the key of its variant."""
+    return json.dumps(sweep_spec.scene_values(spec, sample), sort_keys=True)
+
+
+def build_variants(spec, out: Path, cli: Path):
+    """The FMU of each variant: spec.fmu, or the scene with each combination of the
+    scene_parameters, built once into DIR/fmus/ (kept, so a resumed sweep rebuilds nothing).
+    Counts the combinations by multiplying, builds them one at a time.
+
+    Returns ({key: fmu bytes}, {variant: key or build error})."""
     if spec.fmu:
-        if not spec.fmu.is_file():
-            raise SpecError("fmu", f"no such file {spec.fmu}", "give the path of a .fmu (relative to the spec)")
-        data = spec.fmu.read_bytes()
+        data = read_fmu(spec.fmu)
         key = hashlib.sha256(data).hexdigest()[:16]
-        return {key: data}, [key] * len(samples)
+        return {key: data}, {"{}": key}
     base = scene_data(spec.scene, cli)
+    check_scene_name(f"{spec.scene}: name", base.get("name", "scene"))
     (out / "fmus").mkdir(exist_ok=True)
-    archives, built, keys = {}, {}, []
-    for sample in samples:
-        values = sweep_spec.scene_values(spec, sample)
-        text = json.dumps(values, sort_keys=True)
-        if text not in built:
-            built[text] = _build(base, values, out / "fmus", archives, cli)
-        keys.append(built[text])
+    sweep_files.remove_leftovers(out / "fmus", ["*.fmu", "*.toml"])
+    archives, keys = {}, {}  # a random sweep holds each scene key at one value: one variant
+    for combo in sweep_spec.Samples(dataclasses.replace(spec, parameters={}, random=None)):
+        keys[variant(spec, combo)] = _build(base, combo, out / "fmus", archives, cli)
     return archives, keys
+
+
+def read_fmu(path: Path) -> bytes:
+    """The bytes of a built FMU, once checked to be a zip holding a modelDescription.xml."""
+    try:
+        data = path.read_bytes()
+    except FileNotFoundError:
+        raise SpecError("fmu", f"no such file {path}", "give the path of a .fmu (relative to the spec)") from None
+    except OSError as e:
+        raise SpecError("fmu", f"{path} cannot be read ({e.strerror})", "give a readable .fmu file") from None
+    try:
+        with zipfile.ZipFile(io.BytesIO(data)) as z:
+            if "modelDescription.xml" not in z.namelist():
+                raise SpecError("fmu", f"{path} is a zip archive without modelDescription.xml, not an FMU",
+                                "give an FMU built with `tensegrity-fmu build`")
+    except zipfile.BadZipFile:
+        raise SpecError("fmu", f"{path} is not an FMU (not a zip archive)",
+                        "give an FMU built with `tensegrity-fmu build`") from None
+    return data
 
 
 def _build(base, values, folder, archives, cli):
@@ -106,18 +171,30 @@ def _build(base, values, folder, archives, cli):
     for path, value in values.items():
         set_scene_key(scene, path, value)
     text = dumps(scene)
-    stem = f"{scene.get('name', 'scene')}-{hashlib.sha256(text.encode()).hexdigest()[:12]}"
+    # The name only labels the file; check_scene_name has refused any that leaves the folder.
+    label = re.sub(r"[^A-Za-z0-9_.-]+", "_", str(scene.get("name", "scene")))[:60]
+    stem = f"{label}-{hashlib.sha256(text.encode()).hexdigest()[:12]}"
     fmu = folder / f"{stem}.fmu"
     if not fmu.is_file():
-        (folder / f"{stem}.toml").write_text(text)
-        res = subprocess.run([str(cli), "build", str(folder / f"{stem}.toml"), "-o", str(fmu)],
-                             capture_output=True, text=True)
+        sweep_files.write_bytes(folder / f"{stem}.toml", text.encode())
+        try:
+            res = subprocess.run([str(cli), "build", str(folder / f"{stem}.toml"), "-o", str(fmu)],
+                                 capture_output=True, text=True)
+        except OSError as e:
+            raise SpecError("scene", f"the CLI {cli} cannot run ({e.strerror})",
+                            "build it with `cargo build --release --workspace`") from None
         if res.returncode != 0:  # this variant's samples become error rows
-            return BuildError(res.stderr.strip().removeprefix("error: "))
+            return BuildError(cli_error(res.stderr))
     data = fmu.read_bytes()
     key = hashlib.sha256(data).hexdigest()[:16]
     archives[key] = data
     return key
+
+
+def cli_error(stderr: str) -> str:
+    """The CLI's error line (notes it prints before it left out)."""
+    errors = [line for line in stderr.splitlines() if line.startswith("error: ")]
+    return " ".join((errors[-1] if errors else stderr).split()).removeprefix("error: ")
 
 
 class BuildError(str):

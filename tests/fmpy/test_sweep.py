@@ -126,26 +126,30 @@ def test_resume_after_a_kill_runs_only_the_remaining_samples(fmus, tmp_path, cap
     body = f'[parameters]\n"node[61].fx" = {[float(i) for i in range(n)]}\n'
     spec = f'fmu = "{tower.path}"\nstop_time = 0.4\nstep = 0.02\noutputs = ["node[61].x"]\n' + body
     proc = start(tmp_path, spec, "--workers", "2")
-    results = tmp_path / "out" / "results.csv"
+    progress = tmp_path / "out" / "progress.csv"
     deadline = time.monotonic() + 60
-    while time.monotonic() < deadline and (not results.exists() or results.read_text().count("\n") < 6):
+    while time.monotonic() < deadline and (not progress.exists() or progress.read_text().count("\n") < 6):
         time.sleep(0.01)
     os.killpg(proc.pid, signal.SIGKILL)  # the sweep and its workers, as a kill -9 of the group
     proc.communicate()
     assert_group_gone(proc.pid)
-    before = results.read_bytes()
+    before = progress.read_bytes()
     done = before[: before.rfind(b"\n") + 1].count(b"\n") - 1
     assert 5 <= done < n, f"{done} rows when killed: the sweep was not interrupted"
+    assert not (tmp_path / "out" / "results.csv").exists()  # written whole at the end, or not at all
     # without --resume the finished rows are never overwritten
     assert sweep_main([str(tmp_path / "spec.toml"), "-o", str(tmp_path / "out")]) == 2
-    assert "results.csv: already holds results; run again with --resume" in capsys.readouterr().err
-    assert results.read_bytes() == before
+    assert "progress.csv: already holds results; run again with --resume" in capsys.readouterr().err
+    assert progress.read_bytes() == before
     code, out, err = sweep(tmp_path, spec, "--workers", "2", "--resume")
     assert code == 0, err
     assert f"resuming: {done} of {n} samples already done, {n - done} to run" in out
     assert f"{n - done} samples run ({n - done} ok, 0 failed)" in out
-    after = results.read_bytes()
-    assert after.startswith(before[: before.rfind(b"\n") + 1])  # finished rows kept as written
+    assert not progress.exists()
+    lines = (tmp_path / "out" / "results.csv").read_text().splitlines()
+    finished = before[: before.rfind(b"\n") + 1].decode().splitlines()
+    assert lines[0] == finished[0] and set(finished[1:]) <= set(lines[1:])  # finished rows kept as written
+    assert [int(line.split(",")[0]) for line in lines[1:]] == list(range(n))  # sorted, each sample once
     got = rows(tmp_path)
     assert sorted(int(r["sample"]) for r in got) == list(range(n))  # each sample once
     assert all(r["status"] == "ok" for r in got)
