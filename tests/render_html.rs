@@ -244,3 +244,48 @@ fn tower20_ten_seconds_at_30_fps() {
     assert_eq!(indices(&d, "cables").len(), 2 * frames.cables.len());
     assert_eq!(d["n_nodes"], frames.n_nodes());
 }
+
+/// The bar counts of the large structure pages: `VIEWER_BARS` (comma-separated multiples of
+/// 3), by default 6,000; tests/fmpy/test_html_viewer.py reads the same variable.
+fn large_bar_counts() -> Vec<usize> {
+    std::env::var("VIEWER_BARS")
+        .unwrap_or_else(|_| "6000".into())
+        .split(',')
+        .map(|b| {
+            b.trim()
+                .parse()
+                .expect("VIEWER_BARS: comma-separated bar counts")
+        })
+        .collect()
+}
+
+/// The structure page `build` puts in an FMU (one frame, at the start) for towers of
+/// [`large_bar_counts`] bars, written as `target/render-test/tower<bars>.html`: about 85
+/// bytes per bar.
+#[test]
+fn large_tower_structure_pages() {
+    for bars in large_bar_counts() {
+        assert_eq!(
+            bars % 3,
+            0,
+            "VIEWER_BARS: multiples of 3 (a stage has 3 bars)"
+        );
+        let scene =
+            tensegrity_fmu::scene::tower_with_rest_lengths(bars / 3, &format!("tower{bars}"));
+        let started = Instant::now();
+        let mut sim = Simulation::new(Model::new(&scene).unwrap());
+        let frames = Frames::record(&mut sim, &[0.0]).unwrap();
+        let html = page(&frames);
+        println!(
+            "{bars} bars: page {} bytes ({:.1} per bar), made in {:.2} s",
+            html.len(),
+            html.len() as f64 / bars as f64,
+            started.elapsed().as_secs_f64()
+        );
+        let d = embedded(&html);
+        assert_eq!(indices(&d, "bars").len(), 2 * bars);
+        assert_eq!(floats(&d, "positions").len(), 3 * scene.nodes.len());
+        assert!(html.len() < 100 * bars, "{} bytes", html.len());
+        std::fs::write(out_dir().join(format!("tower{bars}.html")), &html).unwrap();
+    }
+}

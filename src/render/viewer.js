@@ -292,9 +292,13 @@
     });
     ctx.setLineDash([]);
 
-    // Nodes, far to near.
+    // Nodes, far to near. Where members are only a few pixels long (a large structure seen
+    // whole), plain nodes would bury them, so only marked or highlighted ones are drawn.
+    var crowded = memberPixels() < 12;
     var order = [];
-    for (i = 0; i < N; i++) if (screen[i]) order.push(i);
+    for (i = 0; i < N; i++) {
+      if (screen[i] && (!crowded || pinned[i] || masses[i] || isSel("node", i))) order.push(i);
+    }
     order.sort(function (x, y) { return screen[y][2] - screen[x][2]; });
     var r0 = Math.max(2.2, barWidth * 0.6);
     order.forEach(function (i) {

@@ -107,6 +107,9 @@ mod tests {
         assert_eq!(runs(&[1, 2, 3, 61, 62, 63]), "1..3, 61..63");
         assert_eq!(runs(&[5]), "5");
         let scattered: Vec<u64> = (0..10).map(|k| 3 * k + 1).collect();
-        assert_eq!(runs(&scattered), "1, 4, 7, 10, 13, 16, 19, 22, … 10 runs in all");
+        assert_eq!(
+            runs(&scattered),
+            "1, 4, 7, 10, 13, 16, 19, 22, … 10 runs in all"
+        );
     }
 }
