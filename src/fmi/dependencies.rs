@@ -21,7 +21,7 @@
 
 use fmi2_model_description::{Causality, DependencyKind, Unknown};
 
-use super::variables::{Binding, GroundField, Variable, VariableTable};
+use super::variables::{Binding, GroundField, VariableTable};
 use crate::model::coords::End;
 use crate::model::Model;
 use crate::outputs::Quantity;
@@ -43,82 +43,195 @@ struct Footprint {
     contact_total: bool,
 }
 
-/// `<Outputs>` and `<InitialUnknowns>` with their dependencies (1-based table indices).
+/// A row of `<InitialUnknowns>` that reads every input and more than this many parameters
+/// omits its list ("depends on all Knowns"): the parameters it then claims too are never
+/// connected to another FMU, so no loop can follow, and the file stays linear in the scene.
+const DENSE_ROW: usize = 64;
+
+/// The Knowns an output reads, split by causality (1-based table indices, ascending).
+#[derive(Debug, Default, Clone)]
+struct Reads {
+    inputs: Vec<u32>,
+    parameters: Vec<u32>,
+}
+
+impl Reads {
+    fn push(&mut self, index: u32, causality: Causality) {
+        if causality == Causality::Input {
+            self.inputs.push(index);
+        } else {
+            self.parameters.push(index);
+        }
+    }
+
+    /// The union of `parts`, each ascending.
+    fn union<'a>(parts: impl IntoIterator<Item = &'a Reads>) -> Reads {
+        let mut all = Reads::default();
+        for part in parts {
+            all.inputs.extend(&part.inputs);
+            all.parameters.extend(&part.parameters);
+        }
+        for list in [&mut all.inputs, &mut all.parameters] {
+            list.sort_unstable();
+            list.dedup();
+        }
+        all
+    }
+}
+
+/// Who reads each Known's footprint, inverted: per cable, bar end, constraint group and
+/// global quantity, the Knowns that enter it. Building it visits each footprint once.
+#[derive(Debug, Default)]
+struct Readers {
+    cable: Vec<Reads>,
+    end: Vec<Reads>,
+    group: Vec<Reads>,
+    energy: Reads,
+    contact_normal: Reads,
+    contact_total: Reads,
+}
+
+/// `<Outputs>` and `<InitialUnknowns>` with their dependencies (1-based table indices), in
+/// the shortest exact form: see [`outputs_row`] and [`initial_row`].
 pub fn model_structure(model: &Model, table: &VariableTable) -> (Vec<Unknown>, Vec<Unknown>) {
     let groups = constraint_groups(model);
-    let known = |v: &Variable| footprint(model, v.binding);
-    let footprints: Vec<Option<Footprint>> = table
-        .variables
-        .iter()
-        .map(|v| matches!(v.causality, Causality::Input | Causality::Parameter).then(|| known(v)))
-        .collect();
+    let readers = readers(model, table, &groups);
+    let known = |c: Causality| table.variables.iter().filter(|v| v.causality == c).count();
+    let (n_inputs, n_parameters) = (known(Causality::Input), known(Causality::Parameter));
+    let none = Reads::default();
+    let coords = &model.coords;
+    let mut node_ends = vec![Vec::new(); coords.node_end.len()];
+    for (e, &n) in coords.end_node.iter().enumerate() {
+        node_ends[n].push(e);
+    }
+    let mut node_cables = vec![Vec::new(); coords.node_end.len()];
+    for (j, cable) in model.cables.iter().enumerate() {
+        for &n in &cable.nodes {
+            node_cables[n].push(j);
+        }
+    }
     let mut outputs = Vec::new();
     let mut initial = Vec::new();
     for (i, v) in table.variables.iter().enumerate() {
         let Binding::Output(q) = v.binding else {
             continue;
         };
-        let reads = |f: &Footprint| reads(model, &groups, q, f);
-        let deps = |causalities: &[Causality]| -> Vec<u32> {
-            table
-                .variables
-                .iter()
-                .zip(&footprints)
-                .enumerate()
-                .filter(|(_, (k, f))| {
-                    causalities.contains(&k.causality) && f.as_ref().is_some_and(reads)
-                })
-                .map(|(j, _)| j as u32 + 1)
-                .collect()
+        let support;
+        let reads = match q {
+            Quantity::NodePosition(..)
+            | Quantity::NodeVelocity(..)
+            | Quantity::LengthError
+            | Quantity::OrthogonalityError => &none,
+            Quantity::CableTension(j) => &readers.cable[j],
+            Quantity::BarForce(b) if coords.static_bar[b] => &none,
+            Quantity::BarForce(b) => &readers.group[groups[b]],
+            Quantity::SupportReaction(k, _) => {
+                let n = model.supports[k].node;
+                // A held end passes on its group's reactions, a static one its own loads;
+                // a bar-less pin holds its cables' tensions.
+                let held = node_ends[n].iter().map(|&e| {
+                    if coords.static_bar[e / 2] {
+                        &readers.end[e]
+                    } else {
+                        &readers.group[groups[e / 2]]
+                    }
+                });
+                let anchored = node_cables[n]
+                    .iter()
+                    .filter(|_| coords.node_end[n].is_none())
+                    .map(|&j| &readers.cable[j]);
+                support = Reads::union(held.chain(anchored));
+                &support
+            }
+            Quantity::Energy => &readers.energy,
+            Quantity::ContactForce(_) => &readers.contact_normal,
+            Quantity::GroundForce(_) => &readers.contact_total,
         };
-        outputs.push(unknown(i, deps(&[Causality::Input])));
-        initial.push(unknown(i, deps(&[Causality::Input, Causality::Parameter])));
+        outputs.push(outputs_row(i, reads, n_inputs));
+        initial.push(initial_row(i, reads, n_inputs, n_parameters));
     }
     (outputs, initial)
 }
 
-fn unknown(index: usize, dependencies: Vec<u32>) -> Unknown {
+/// An `<Outputs>` row (the Knowns are the inputs): the list, omitted only when it names
+/// every input. Never more: a claimed input would be a false algebraic loop.
+fn outputs_row(index: usize, reads: &Reads, n_inputs: usize) -> Unknown {
+    if !reads.inputs.is_empty() && reads.inputs.len() == n_inputs {
+        return unknown(index, None);
+    }
+    unknown(index, Some(reads.inputs.clone()))
+}
+
+/// An `<InitialUnknowns>` row (the Knowns are the inputs and the parameters, all
+/// `initial="exact"`): omitted when it reads every Known, or every input and more than
+/// [`DENSE_ROW`] parameters; listed otherwise.
+fn initial_row(index: usize, reads: &Reads, n_inputs: usize, n_parameters: usize) -> Unknown {
+    let count = reads.inputs.len() + reads.parameters.len();
+    let every_input = reads.inputs.len() == n_inputs;
+    let all = count > 0 && count == n_inputs + n_parameters;
+    if all || (every_input && count > DENSE_ROW) {
+        return unknown(index, None);
+    }
+    let mut list = [reads.inputs.as_slice(), &reads.parameters].concat();
+    list.sort_unstable();
+    unknown(index, Some(list))
+}
+
+/// `dependencies: None` omits the attribute: the row depends on all Knowns.
+fn unknown(index: usize, dependencies: Option<Vec<u32>>) -> Unknown {
     Unknown {
         index: index as u32 + 1,
         // No Known enters an output through a constant factor: clamps, lengths and
         // solves make every dependency a general one.
-        dependencies_kind: (!dependencies.is_empty())
-            .then(|| vec![DependencyKind::Dependent; dependencies.len()]),
-        dependencies: Some(dependencies),
+        dependencies_kind: dependencies
+            .as_ref()
+            .filter(|d| !d.is_empty())
+            .map(|d| vec![DependencyKind::Dependent; d.len()]),
+        dependencies,
     }
 }
 
-/// Whether output `q` reads a Known with footprint `f`.
-fn reads(model: &Model, groups: &[usize], q: Quantity, f: &Footprint) -> bool {
-    let coords = &model.coords;
-    let pushes_group = |g: usize| {
-        f.ends.iter().any(|&e| groups[e / 2] == g) || f.inertia.iter().any(|&b| groups[b] == g)
+/// The readers of every input and parameter in `table`.
+fn readers(model: &Model, table: &VariableTable, groups: &[usize]) -> Readers {
+    let mut r = Readers {
+        cable: vec![Reads::default(); model.cables.len()],
+        end: vec![Reads::default(); model.coords.n_ends()],
+        group: vec![Reads::default(); model.bars.len()],
+        ..Readers::default()
     };
-    match q {
-        Quantity::NodePosition(..)
-        | Quantity::NodeVelocity(..)
-        | Quantity::LengthError
-        | Quantity::OrthogonalityError => false,
-        Quantity::CableTension(j) => f.cables.contains(&j),
-        Quantity::BarForce(i) => !coords.static_bar[i] && pushes_group(groups[i]),
-        Quantity::SupportReaction(k, _) => {
-            let n = model.supports[k].node;
-            let at_node = (0..coords.n_ends()).filter(|&e| coords.end_node[e] == n);
-            let held = at_node.clone().any(|e| {
-                if coords.static_bar[e / 2] {
-                    f.ends.contains(&e)
-                } else {
-                    pushes_group(groups[e / 2])
-                }
-            });
-            let anchored = coords.node_end[n].is_none()
-                && f.cables.iter().any(|&j| model.cables[j].nodes.contains(&n));
-            held || anchored
+    let mut pushed = Vec::new();
+    for (i, v) in table.variables.iter().enumerate() {
+        if !matches!(v.causality, Causality::Input | Causality::Parameter) {
+            continue;
         }
-        Quantity::Energy => f.energy,
-        Quantity::ContactForce(_) => f.contact_normal,
-        Quantity::GroundForce(_) => f.contact_total,
+        let (index, c) = (i as u32 + 1, v.causality);
+        let f = footprint(model, v.binding);
+        for &j in &f.cables {
+            r.cable[j].push(index, c);
+        }
+        for &e in &f.ends {
+            r.end[e].push(index, c);
+        }
+        // A Known pushes a group through an end or an inertia; listed once per group.
+        pushed.clear();
+        pushed.extend(f.ends.iter().map(|&e| groups[e / 2]));
+        pushed.extend(f.inertia.iter().map(|&b| groups[b]));
+        pushed.sort_unstable();
+        pushed.dedup();
+        for &g in &pushed {
+            r.group[g].push(index, c);
+        }
+        for (flag, reads) in [
+            (f.energy, &mut r.energy),
+            (f.contact_normal, &mut r.contact_normal),
+            (f.contact_total, &mut r.contact_total),
+        ] {
+            if flag {
+                reads.push(index, c);
+            }
+        }
     }
+    r
 }
 
 /// The constraint group of each bar: bars that share a constraint column are one group.

@@ -90,13 +90,21 @@ def fmu(request, fmus):
     return fmus.builtin(request.param)
 
 
-def declared(unknowns):
-    """{output name: set of Known names} from fmpy's ModelStructure list."""
-    out = {}
-    for u in unknowns:
-        assert u.dependencies is not None, f"{u.variable.name}: dependencies omitted"
-        out[u.variable.name] = {d.name for d in u.dependencies}
-    return out
+def knowns(fmu, section):
+    """The Knowns of a ModelStructure section: the inputs for <Outputs>, the inputs and
+    parameters (all initial="exact") for <InitialUnknowns>."""
+    causalities = {"outputs": ("input",), "initialUnknowns": ("input", "parameter")}[section]
+    return [v.name for v in fmu.md.modelVariables if v.causality in causalities]
+
+
+def declared(fmu, section):
+    """{output name: set of Known names} from fmpy's ModelStructure list; an omitted list
+    means every Known of the section."""
+    every = set(knowns(fmu, section))
+    return {
+        u.variable.name: every if u.dependencies is None else {d.name for d in u.dependencies}
+        for u in getattr(fmu.md, section)
+    }
 
 
 def perturbed(value):
@@ -165,9 +173,9 @@ def check(fmu, slave, knowns, deps):
 
 
 def test_outputs_declare_exactly_the_inputs_they_read(fmu, open_fmu):
-    deps = declared(fmu.md.outputs)
+    deps = declared(fmu, "outputs")
     assert set(deps) == set(fmu.outputs)
-    inputs = [v.name for v in fmu.md.modelVariables if v.causality == "input"]
+    inputs = knowns(fmu, "outputs")
     assert inputs
     for o, ds in deps.items():
         assert all(fmu.variables[d].causality == "input" for d in ds), o
@@ -177,7 +185,7 @@ def test_outputs_declare_exactly_the_inputs_they_read(fmu, open_fmu):
 
 
 def test_state_outputs_depend_on_no_input(fmu):
-    deps = declared(fmu.md.outputs)
+    deps = declared(fmu, "outputs")
     for o in fmu.outputs:
         if o.startswith("node[") and o.split(".")[1] in ("x", "y", "z", "vx", "vy", "vz"):
             assert deps[o] == set(), o
@@ -186,7 +194,7 @@ def test_state_outputs_depend_on_no_input(fmu):
 
 
 def test_cable_tension_depends_on_its_own_command_only(fmu):
-    deps = declared(fmu.md.outputs)
+    deps = declared(fmu, "outputs")
     for j, cable in enumerate(fmu.scene.get("cables", []), start=1):
         own = {"force_density": {f"cable[{j}].force_density"},
                "rest_length": {f"cable[{j}].rest_length"}}.get(cable.get("control"), set())
@@ -194,18 +202,20 @@ def test_cable_tension_depends_on_its_own_command_only(fmu):
 
 
 def test_initial_unknowns_declare_the_parameters_they_read(fmu, open_fmu):
-    deps = declared(fmu.md.initialUnknowns)
+    deps = declared(fmu, "initialUnknowns")
     assert set(deps) == set(fmu.outputs)
-    knowns = [v.name for v in fmu.md.modelVariables if v.causality in ("input", "parameter")]
+    every = knowns(fmu, "initialUnknowns")
     for o, ds in deps.items():
         assert all(fmu.variables[d].causality in ("input", "parameter") for d in ds), o
-    solver = [k for k in knowns if k.startswith("solver.")]
-    for o in fmu.outputs:
-        assert not (deps[o] & set(solver)), f"{o} cannot depend on the solver settings"
+    # A list omitted for its length claims the solver settings too (see test_model_structure).
+    listed = {u.variable.name for u in fmu.md.initialUnknowns if u.dependencies is not None}
+    solver = {k for k in every if k.startswith("solver.")}
+    for o in listed:
+        assert not (deps[o] & solver), f"{o} cannot depend on the solver settings"
     slave = open_fmu(fmu)
     slave.fmu.setupExperiment(startTime=0.0)
     slave.fmu.enterInitializationMode()
-    check(fmu, slave, knowns, deps)
+    check(fmu, slave, every, deps)
     slave.fmu.exitInitializationMode()
 
 
