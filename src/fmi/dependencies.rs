@@ -169,7 +169,7 @@ fn initial_row(index: usize, reads: &Reads, n_inputs: usize, n_parameters: usize
     let count = reads.inputs.len() + reads.parameters.len();
     let every_input = reads.inputs.len() == n_inputs;
     let all = count > 0 && count == n_inputs + n_parameters;
-    if all || (every_input && count > DENSE_ROW) {
+    if all || (every_input && reads.parameters.len() > DENSE_ROW) {
         return unknown(index, None);
     }
     let mut list = [reads.inputs.as_slice(), &reads.parameters].concat();
