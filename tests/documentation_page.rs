@@ -254,3 +254,126 @@ fn documentation_names_the_file_the_fmu_was_built_as() {
         );
     }
 }
+
+/// The documentation of a tower of `stages` stages (3 bars each) as `build` writes it:
+/// `documentation/index.html` and the viewer's `structure.html`.
+fn documentation_of_tower(stages: usize) -> (Scene, String, String) {
+    use tensegrity_fmu::render::{html, Frames};
+    let scene = tensegrity_fmu::scene::tower_with_rest_lengths(stages, "tower");
+    let mut sim = Simulation::new(Model::new(&scene).unwrap());
+    let index = index_html(&sim, &VariableTable::new(&sim), "tower.fmu");
+    let viewer = html::page(&Frames::record(&mut sim, &[0.0]).unwrap());
+    (scene, index, viewer)
+}
+
+/// The documentation's bytes (both pages) at 600 and 6,000 bars: about linear, and
+/// under 120 bytes per bar (a table row per variable took over 2,000).
+#[test]
+fn documentation_grows_at_most_linearly_with_the_bars() {
+    let (_, index_600, viewer_600) = documentation_of_tower(200);
+    let (_, index_6000, viewer_6000) = documentation_of_tower(2000);
+    let small = (index_600.len() + viewer_600.len()) as f64;
+    let large = (index_6000.len() + viewer_6000.len()) as f64;
+    println!(
+        "600 bars: index {} B, viewer {} B; 6000 bars: index {} B, viewer {} B; ratio {:.2}",
+        index_600.len(),
+        viewer_600.len(),
+        index_6000.len(),
+        viewer_6000.len(),
+        large / small
+    );
+    assert!(
+        large / small <= 11.0,
+        "10× the bars: {:.2}× the bytes",
+        large / small
+    );
+    assert!(
+        large / 6000.0 < 120.0,
+        "{:.0} bytes per bar",
+        large / 6000.0
+    );
+}
+
+/// The summary row of kind `name` (as shown, e.g. `node[1..6003].x`): its cells.
+fn kind_row(html: &str, name: &str) -> Vec<String> {
+    let start = pos(html, &format!("<tr class=\"kind\"><td><code>{name}</code>"));
+    let end = start + pos(&html[start..], "</tr>");
+    html[start..end]
+        .split("<td>")
+        .skip(1)
+        .map(|c| c.trim_end_matches("</td>").to_string())
+        .collect()
+}
+
+#[test]
+fn a_large_structure_gets_a_summary_by_kind_and_the_first_rows() {
+    use tensegrity_fmu::fmi::documentation::{FULL_TABLE_VARIABLES, LISTED_PER_KIND};
+    let stages = 2000;
+    let (scene, html, _) = documentation_of_tower(stages);
+    let sim = Simulation::new(Model::new(&scene).unwrap());
+    let variables = VariableTable::new(&sim).variables.len();
+    assert!(variables > FULL_TABLE_VARIABLES);
+    let (nodes, bars, cables) = (3 * (stages + 1), 3 * stages, 3 * (2 * stages + 1));
+    assert_eq!(
+        (scene.nodes.len(), scene.bars.len(), scene.cables.len()),
+        (nodes, bars, cables)
+    );
+    // name, count, causality, variability, type, unit, start, meaning
+    let x = kind_row(&html, &format!("node[1..{nodes}].x"));
+    assert_eq!(
+        x[1..6],
+        [&nodes.to_string(), "Output", "Continuous", "Real", "m"]
+    );
+    assert_eq!(x[7], "position of node 1 along x");
+    let tension = kind_row(&html, &format!("cable[1..{cables}].tension"));
+    assert_eq!(tension[1], cables.to_string());
+    let mass = kind_row(&html, &format!("bar[1..{bars}].mass"));
+    assert_eq!(
+        mass[1..7],
+        [&bars.to_string(), "Parameter", "Tunable", "Real", "kg", "1"]
+    );
+    let rest: Vec<f64> = scene
+        .cables
+        .iter()
+        .map(|c| c.rest_length.unwrap())
+        .collect();
+    let lo = rest.iter().copied().fold(f64::INFINITY, f64::min);
+    let hi = rest.iter().copied().fold(0.0, f64::max);
+    assert!(lo < hi);
+    let rest_row = kind_row(&html, &format!("cable[1..{cables}].rest_length"));
+    assert_eq!(rest_row[6], format!("{lo} … {hi}"));
+    let inputs = kind_row(&html, &format!("node[{}..{nodes}].fx", nodes - 2));
+    assert_eq!(inputs[1..3], ["3", "Input"]);
+    assert_eq!(kind_row(&html, "node[1..3].reaction_z")[1], "3");
+    // Every variable is counted once.
+    let counted: usize = html
+        .split("<tr class=\"kind\">")
+        .skip(1)
+        .map(|r| {
+            r.split("<td>")
+                .nth(2)
+                .unwrap()
+                .trim_end_matches("</td>")
+                .parse::<usize>()
+                .unwrap()
+        })
+        .sum();
+    assert_eq!(counted, variables);
+    // The first rows of each kind, and no more.
+    for k in 1..=LISTED_PER_KIND {
+        assert_eq!(row(&html, &format!("node[{k}].x"))[1], "Output");
+        assert_eq!(row(&html, &format!("cable[{k}].rest_length"))[2], "Tunable");
+    }
+    let beyond = LISTED_PER_KIND + 1;
+    for name in [format!("node[{beyond}].x"), format!("bar[{beyond}].mass")] {
+        assert!(
+            !html.contains(&format!("<tr><td><code>{name}</code>")),
+            "{name}"
+        );
+    }
+    assert!(html.matches("<tr").count() < 150);
+    // A small structure still lists every variable.
+    let small = page(&builtin("tower20").unwrap());
+    assert!(small.contains("<tr><td><code>node[61].x</code>"));
+    assert!(!small.contains("class=\"kind\""));
+}

@@ -81,6 +81,27 @@ fn embedded(page: &str) -> serde_json::Value {
     serde_json::from_str(&page[start..start + len]).expect("valid JSON")
 }
 
+/// The little-endian 4-byte words of the base64 text `d[key]`.
+fn words(d: &serde_json::Value, key: &str) -> Vec<[u8; 4]> {
+    use base64::Engine;
+    let text = d[key].as_str().unwrap_or_else(|| panic!("{key}: not text"));
+    let bytes = base64::engine::general_purpose::STANDARD
+        .decode(text)
+        .unwrap();
+    assert_eq!(bytes.len() % 4, 0, "{key}");
+    bytes.chunks(4).map(|w| [w[0], w[1], w[2], w[3]]).collect()
+}
+
+/// The `f32` array `d[key]`.
+fn floats(d: &serde_json::Value, key: &str) -> Vec<f32> {
+    words(d, key).into_iter().map(f32::from_le_bytes).collect()
+}
+
+/// The `u32` array `d[key]`.
+fn indices(d: &serde_json::Value, key: &str) -> Vec<u32> {
+    words(d, key).into_iter().map(u32::from_le_bytes).collect()
+}
+
 /// prism2 with a ground plane under it, a point mass on node 8, a sideways sinusoidal push on
 /// node 7 (its force input) and cable 13's force density cut to 0 for 1 s ≤ t < 1.5 s (slack).
 fn prism2_frames() -> Frames {
@@ -117,9 +138,10 @@ fn prism2_page_embeds_the_run() {
     let d = embedded(&html);
     assert_eq!(d["name"], "prism2");
     assert_eq!(d["n_nodes"], 9);
-    assert_eq!(d["bars"].as_array().unwrap().len(), 6);
-    assert_eq!(d["cables"].as_array().unwrap().len(), 15);
-    assert_eq!(d["bars"][0], serde_json::json!([0, 3]));
+    let bars = indices(&d, "bars");
+    assert_eq!(bars.len(), 2 * 6);
+    assert_eq!(indices(&d, "cables").len(), 2 * 15);
+    assert_eq!(bars[..2], [0, 3]);
     assert_eq!(d["pinned"], serde_json::json!([0, 1, 2]));
     assert_eq!(d["point_masses"], serde_json::json!([7]));
     assert_eq!(d["ground"]["height"], -0.05);
@@ -127,29 +149,17 @@ fn prism2_page_embeds_the_run() {
     let times = d["times"].as_array().unwrap();
     assert_eq!(times.len(), 91);
     assert_eq!(times[90], 3.0);
-    for key in ["positions", "velocities"] {
-        let arr = d[key].as_array().unwrap();
-        assert_eq!(arr.len(), 91);
-        assert!(
-            arr.iter().all(|f| f.as_array().unwrap().len() == 27),
-            "{key}"
-        );
-    }
-    assert!(d["tensions"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .all(|f| f.as_array().unwrap().len() == 15));
-    assert!(d["bar_forces"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .all(|f| f.as_array().unwrap().len() == 6));
+    let positions = floats(&d, "positions");
+    assert_eq!(positions.len(), 91 * 27);
+    assert_eq!(floats(&d, "velocities").len(), 91 * 27);
+    let tensions = floats(&d, "tensions");
+    assert_eq!(tensions.len(), 91 * 15);
+    assert_eq!(floats(&d, "bar_forces").len(), 91 * 6);
     // Values as recorded (to f32 precision): node 7 at the last frame; cable 13 slack at
     // t = 1.2 s (frame 36) only.
     let last = &frames.positions[90][6];
     for c in 0..3 {
-        let got = d["positions"][90][3 * 6 + c].as_f64().unwrap();
+        let got = f64::from(positions[90 * 27 + 3 * 6 + c]);
         assert!(
             (got - last[c]).abs() <= 1e-6 * (1.0 + last[c].abs()),
             "{got} vs {}",
@@ -157,15 +167,9 @@ fn prism2_page_embeds_the_run() {
         );
     }
     assert_eq!(frames.tensions[36][12], 0.0);
-    assert_eq!(d["tensions"][36][12], 0.0);
-    assert!(
-        d["tensions"][90][12].as_f64().unwrap() > 1.0,
-        "taut again at the end"
-    );
-    assert!(
-        d["tensions"][0][12].as_f64().unwrap() > 1.0,
-        "taut at the start"
-    );
+    assert_eq!(tensions[36 * 15 + 12], 0.0);
+    assert!(tensions[90 * 15 + 12] > 1.0, "taut again at the end");
+    assert!(tensions[12] > 1.0, "taut at the start");
     // The structure moves: the top node is elsewhere at the end.
     let moved = (0..3).map(|c| (frames.positions[90][6][c] - frames.positions[0][6][c]).powi(2));
     assert!(moved.sum::<f64>().sqrt() > 0.01);
@@ -207,7 +211,8 @@ fn run_without_frames_still_makes_a_page() {
     let d = embedded(&html);
     assert_eq!(d["n_nodes"], 0);
     assert_eq!(d["times"], serde_json::json!([]));
-    assert_eq!(d["bars"].as_array().unwrap().len(), 6);
+    assert_eq!(indices(&d, "bars").len(), 2 * 6);
+    assert!(floats(&d, "positions").is_empty());
     std::fs::write(out_dir().join("empty.html"), &html).unwrap();
 }
 
@@ -235,7 +240,52 @@ fn tower20_ten_seconds_at_30_fps() {
     );
     let d = embedded(&html);
     assert_eq!(d["times"].as_array().unwrap().len(), 301);
-    assert_eq!(d["bars"].as_array().unwrap().len(), 60);
-    assert_eq!(d["cables"].as_array().unwrap().len(), frames.cables.len());
+    assert_eq!(indices(&d, "bars").len(), 2 * 60);
+    assert_eq!(indices(&d, "cables").len(), 2 * frames.cables.len());
     assert_eq!(d["n_nodes"], frames.n_nodes());
+}
+
+/// The bar counts of the large structure pages: `VIEWER_BARS` (comma-separated multiples of
+/// 3), by default 6,000; tests/fmpy/test_html_viewer.py reads the same variable.
+fn large_bar_counts() -> Vec<usize> {
+    std::env::var("VIEWER_BARS")
+        .unwrap_or_else(|_| "6000".into())
+        .split(',')
+        .map(|b| {
+            b.trim()
+                .parse()
+                .expect("VIEWER_BARS: comma-separated bar counts")
+        })
+        .collect()
+}
+
+/// The structure page `build` puts in an FMU (one frame, at the start) for towers of
+/// [`large_bar_counts`] bars, written as `target/render-test/tower<bars>.html`: about 85
+/// bytes per bar.
+#[test]
+fn large_tower_structure_pages() {
+    for bars in large_bar_counts() {
+        assert_eq!(
+            bars % 3,
+            0,
+            "VIEWER_BARS: multiples of 3 (a stage has 3 bars)"
+        );
+        let scene =
+            tensegrity_fmu::scene::tower_with_rest_lengths(bars / 3, &format!("tower{bars}"));
+        let started = Instant::now();
+        let mut sim = Simulation::new(Model::new(&scene).unwrap());
+        let frames = Frames::record(&mut sim, &[0.0]).unwrap();
+        let html = page(&frames);
+        println!(
+            "{bars} bars: page {} bytes ({:.1} per bar), made in {:.2} s",
+            html.len(),
+            html.len() as f64 / bars as f64,
+            started.elapsed().as_secs_f64()
+        );
+        let d = embedded(&html);
+        assert_eq!(indices(&d, "bars").len(), 2 * bars);
+        assert_eq!(floats(&d, "positions").len(), 3 * scene.nodes.len());
+        assert!(html.len() < 100 * bars, "{} bytes", html.len());
+        std::fs::write(out_dir().join(format!("tower{bars}.html")), &html).unwrap();
+    }
 }

@@ -3,7 +3,7 @@
 use std::time::Instant;
 
 use tensegrity_fmu::integrator::Method;
-use tensegrity_fmu::scene::{builtin, tower_scene, Scene};
+use tensegrity_fmu::scene::{builtin, tower_with_rest_lengths, Scene};
 use tensegrity_fmu::{Model, Simulation};
 
 /// Step size of every measured run, s.
@@ -30,20 +30,10 @@ pub fn us_per_step(sim: &mut Simulation, seconds: f64) -> Result<f64, String> {
     Ok(started.elapsed().as_secs_f64() * 1e6 / steps as f64)
 }
 
-/// A tower of `k` stages with elastic cables at 98% of their lengths (explicit rest lengths:
-/// the dense prestress solve is not what is measured), stepped by rk4 at [`STEP`].
+/// A tower of `k` stages with explicit rest lengths (the dense prestress solve is not what
+/// is measured), stepped by rk4 at [`STEP`].
 pub fn tower(k: usize) -> Scene {
-    let mut scene = with_rk4(tower_scene(k, Some(500.0), &format!("tower{k}")));
-    scene.prestress = None;
-    for c in &mut scene.cables {
-        let [a, b] = c.nodes;
-        let d: f64 = (0..3)
-            .map(|i| (scene.nodes[b - 1][i] - scene.nodes[a - 1][i]).powi(2))
-            .sum::<f64>()
-            .sqrt();
-        c.rest_length = Some(0.98 * d);
-    }
-    scene
+    with_rk4(tower_with_rest_lengths(k, &format!("tower{k}")))
 }
 
 /// Prints one row per tower height: the fastest round's µs per step, and the ratio of µs

@@ -4,6 +4,7 @@ mod analyze;
 mod bench;
 mod bench_csv;
 mod bench_effects;
+mod bench_fmu;
 mod bench_stiff;
 mod bench_threads;
 mod bench_work;
@@ -184,6 +185,19 @@ enum BenchCommand {
     /// The internal steps and wall time predicted before a run against those it takes,
     /// for seven extreme scenes and the shipped ones (1 s, a row every step).
     Work,
+    /// The FMU at scale, per tower size: variables, modelDescription.xml and .fmu sizes,
+    /// build time, and through fmpy the read time and one doStep's.
+    Fmu {
+        /// Tower sizes in bars (multiples of 3).
+        #[arg(long, value_delimiter = ',', default_value = "60,600,6000,60000")]
+        bars: Vec<usize>,
+        /// The Python that has fmpy.
+        #[arg(long, default_value = ".venv/bin/python")]
+        python: PathBuf,
+        /// The generic FMU binary (default: as for `build`).
+        #[arg(long)]
+        binary: Option<PathBuf>,
+    },
     /// µs per step of large towers evaluated on one thread and on two, in alternation in
     /// one process, with the median ratio of the rounds.
     Threads {
@@ -267,6 +281,18 @@ pub fn run(cli: Cli) -> Result<(), String> {
             ..
         } => bench_threads::run(&stages, seconds, rounds),
         Command::Bench {
+            what:
+                Some(BenchCommand::Fmu {
+                    bars,
+                    python,
+                    binary,
+                }),
+            ..
+        } => {
+            bench_fmu::check_bars(&bars)?;
+            bench_fmu::run(&bars, &python, &fmu_binary(binary)?)
+        }
+        Command::Bench {
             what: Some(BenchCommand::Stiff { repeats }),
             ..
         } => bench_stiff::run(repeats),
@@ -316,20 +342,7 @@ fn load_scene(scene: Option<String>) -> Result<Scene, String> {
 
 fn build(scene_arg: &str, output: Option<PathBuf>, binary: Option<PathBuf>) -> Result<(), String> {
     let scene = Scene::from_name_or_file(scene_arg).map_err(|e| e.to_string())?;
-    let binary = match binary {
-        Some(b) => b,
-        None => {
-            let exe = std::env::current_exe().map_err(|e| e.to_string())?;
-            let dir = exe.parent().ok_or("cannot locate this program's folder")?;
-            default_binary(dir)
-        }
-    };
-    if !binary.is_file() {
-        return Err(format!(
-            "the FMU binary {} is missing: build it with `cargo build --release --workspace`, or pass --binary",
-            binary.display()
-        ));
-    }
+    let binary = fmu_binary(binary)?;
     let out = output.unwrap_or_else(|| PathBuf::from(format!("{}.fmu", scene.name)));
     let built = fmi::package::build_fmu(&scene, &binary, &out)?;
     if let Some(start) = built.start {
@@ -350,6 +363,25 @@ fn build(scene_arg: &str, output: Option<PathBuf>, binary: Option<PathBuf>) -> R
     );
     println!("{}", out.display());
     Ok(())
+}
+
+/// `binary`, or the default one; either must exist.
+fn fmu_binary(binary: Option<PathBuf>) -> Result<PathBuf, String> {
+    let binary = match binary {
+        Some(b) => b,
+        None => {
+            let exe = std::env::current_exe().map_err(|e| e.to_string())?;
+            let dir = exe.parent().ok_or("cannot locate this program's folder")?;
+            default_binary(dir)
+        }
+    };
+    if !binary.is_file() {
+        return Err(format!(
+            "the FMU binary {} is missing: build it with `cargo build --release --workspace`, or pass --binary",
+            binary.display()
+        ));
+    }
+    Ok(binary)
 }
 
 /// The FMU binary for `build` without `--binary`. `cargo build` puts the program in

@@ -3,6 +3,7 @@
 use fmi2_model_description::Causality;
 
 use super::description::default_communication_step;
+use super::variables::kinds::{kinds, pattern, runs};
 use super::variables::{BaseType, Binding, Variable, VariableTable};
 use crate::analysis::modes::{ModeKind, Spectrum};
 use crate::integrator::Method;
@@ -65,6 +66,60 @@ fn variable_table(h: &mut String, title: &str, variables: &[&Variable]) {
     h.push_str("</table>\n");
 }
 
+/// Tables list every variable of an FMU with at most this many; a larger one gets a
+/// summary by kind and the first [`LISTED_PER_KIND`] rows of each kind, so the page grows
+/// with the number of kinds, not of variables.
+pub const FULL_TABLE_VARIABLES: usize = 2_000;
+
+/// Rows listed per kind in a summarised table.
+pub const LISTED_PER_KIND: usize = 3;
+
+/// A summary row per kind of `variables`, then the first [`LISTED_PER_KIND`] of each kind.
+fn summarised_table(h: &mut String, title: &str, variables: &[&Variable]) {
+    if variables.is_empty() {
+        return;
+    }
+    let kinds = kinds(variables);
+    h.push_str(&format!(
+        "<h3>{title}</h3>\n<table><tr><th>variables</th><th>count</th><th>causality</th><th>variability</th><th>type</th><th>unit</th><th>start</th><th>meaning (of the first)</th></tr>\n"
+    ));
+    for kind in &kinds {
+        let v = kind.first;
+        let (key, _) = pattern(&v.name);
+        let name = match kind.indices.len() {
+            0 => v.name.clone(),
+            _ => key.replacen("[i]", &format!("[{}]", runs(&kind.indices)), 1),
+        };
+        let start = match kind.starts {
+            Some((lo, hi)) if !kind.same_start => format!("{lo} … {hi}"),
+            _ => start_text(v),
+        };
+        h.push_str(&format!(
+            "<tr class=\"kind\"><td><code>{}</code></td><td>{}</td><td>{:?}</td><td>{:?}</td><td>{:?}</td><td>{}</td><td>{}</td><td>{}</td></tr>\n",
+            escape(&name),
+            kind.indices.len().max(1),
+            v.causality,
+            v.variability,
+            v.base_type,
+            v.unit.unwrap_or(""),
+            start,
+            escape(&v.description)
+        ));
+    }
+    h.push_str("</table>\n");
+    let mut seen = std::collections::HashMap::new();
+    let listed: Vec<&Variable> = variables
+        .iter()
+        .copied()
+        .filter(|v| {
+            let n = seen.entry(pattern(&v.name).0).or_insert(0usize);
+            *n += 1;
+            *n <= LISTED_PER_KIND
+        })
+        .collect();
+    variable_table(h, &format!("{title}: the first of each kind"), &listed);
+}
+
 /// Escapes `s` and sets its `backquoted` spans as code.
 fn escape_code(s: &str) -> String {
     escape(s)
@@ -119,10 +174,26 @@ pub fn index_html(sim: &Simulation, table: &VariableTable, fmu_file: &str) -> St
             .filter(|v| v.causality == c)
             .collect()
     };
-    variable_table(&mut h, "Inputs", &of(Causality::Input));
-    variable_table(&mut h, "Outputs", &of(Causality::Output));
+    let full = table.variables.len() <= FULL_TABLE_VARIABLES;
+    if !full {
+        h.push_str(&format!(
+            "<p>{} in all, summarised by kind (index ranges, start values from least to \
+             greatest, the meaning of the first), then the first {LISTED_PER_KIND} of each \
+             kind; <code>modelDescription.xml</code> lists every one.</p>\n",
+            count(table.variables.len(), "variable", "variables")
+        ));
+    }
+    let section = |h: &mut String, title: &str, c: Causality| {
+        if full {
+            variable_table(h, title, &of(c));
+        } else {
+            summarised_table(h, title, &of(c));
+        }
+    };
+    section(&mut h, "Inputs", Causality::Input);
+    section(&mut h, "Outputs", Causality::Output);
     h.push_str("<p>Tunable parameters may be changed between communication steps; fixed ones only before the end of initialization.</p>\n");
-    variable_table(&mut h, "Parameters", &of(Causality::Parameter));
+    section(&mut h, "Parameters", Causality::Parameter);
     h.push_str("</body></html>\n");
     h
 }

@@ -4,6 +4,29 @@
   "use strict";
 
   var D = JSON.parse(document.getElementById("run-data").textContent);
+  // The bulk comes as base64 of little-endian typed arrays (see html.rs): node pairs as
+  // u32, per-frame values as f32 flattened over frames. Each frame becomes a view.
+  function decode(b64) {
+    var s = atob(b64), bytes = new Uint8Array(s.length);
+    for (var i = 0; i < s.length; i++) bytes[i] = s.charCodeAt(i);
+    return bytes.buffer;
+  }
+  function pairs(b64) {
+    var a = new Uint32Array(decode(b64)), out = new Array(a.length >> 1);
+    for (var i = 0; i < out.length; i++) out[i] = [a[2 * i], a[2 * i + 1]];
+    return out;
+  }
+  function perFrame(b64, width) {
+    var a = new Float32Array(decode(b64)), out = [];
+    for (var k = 0; k < D.times.length; k++) out.push(a.subarray(k * width, (k + 1) * width));
+    return out;
+  }
+  D.bars = pairs(D.bars);
+  D.cables = pairs(D.cables);
+  D.positions = perFrame(D.positions, 3 * D.n_nodes);
+  D.velocities = perFrame(D.velocities, 3 * D.n_nodes);
+  D.tensions = perFrame(D.tensions, D.cables.length);
+  D.bar_forces = perFrame(D.bar_forces, D.bars.length);
   var N = D.n_nodes, NB = D.bars.length, NC = D.cables.length, NF = D.times.length;
 
   var STYLE = {
@@ -269,9 +292,13 @@
     });
     ctx.setLineDash([]);
 
-    // Nodes, far to near.
+    // Nodes, far to near. Where members are only a few pixels long (a large structure seen
+    // whole), plain nodes would bury them, so only marked or highlighted ones are drawn.
+    var crowded = memberPixels() < 12;
     var order = [];
-    for (i = 0; i < N; i++) if (screen[i]) order.push(i);
+    for (i = 0; i < N; i++) {
+      if (screen[i] && (!crowded || pinned[i] || masses[i] || isSel("node", i))) order.push(i);
+    }
     order.sort(function (x, y) { return screen[y][2] - screen[x][2]; });
     var r0 = Math.max(2.2, barWidth * 0.6);
     order.forEach(function (i) {

@@ -46,6 +46,23 @@ pub fn generate(name: &str) -> Option<Scene> {
 /// Minimum cable tension of the built-in prestress, in N.
 const PRESTRESS_TENSION: f64 = 10.0;
 
+/// [`tower_scene`] with elastic cables (500 N/m) at 98% of their lengths: explicit rest
+/// lengths and no prestress solve, so it builds in linear time at any height (the scaling
+/// benchmarks' scene).
+pub fn tower_with_rest_lengths(stages: usize, name: &str) -> Scene {
+    let mut scene = tower_scene(stages, Some(500.0), name);
+    scene.prestress = None;
+    for c in &mut scene.cables {
+        let [a, b] = c.nodes;
+        let d: f64 = (0..3)
+            .map(|i| (scene.nodes[b - 1][i] - scene.nodes[a - 1][i]).powi(2))
+            .sum::<f64>()
+            .sqrt();
+        c.rest_length = Some(0.98 * d);
+    }
+    scene
+}
+
 /// A class-2 tower of `stages` prism stages with the paper's geometry (`dynamics.md`):
 /// elastic cables of the given stiffness, or force-density controlled cables when `None`.
 /// Prestressed, nodes 1–3 pinned, force inputs on the top ring.

@@ -10,7 +10,8 @@ mod read;
 mod validate;
 
 pub use builtin::{
-    builtin, builtin_names, generate, steel_prism_scene, tower_scene, BUILTIN_DEFAULT,
+    builtin, builtin_names, generate, steel_prism_scene, tower_scene, tower_with_rest_lengths,
+    BUILTIN_DEFAULT,
 };
 pub use extreme::{extreme_scenes, Extreme};
 

@@ -5,6 +5,7 @@
 //! A parameter's variability lives in the table too ([`Variable::variability`]): tunable
 //! parameters are [`Variability::Tunable`], and nothing else lists them.
 
+pub mod kinds;
 mod parameter_table;
 
 use fmi2_model_description::{Causality, Initial, Variability};
