@@ -48,6 +48,11 @@ struct Footprint {
 /// connected to another FMU, so no loop can follow, and the file stays linear in the scene.
 const DENSE_ROW: usize = 64;
 
+/// Dependency entries that `<InitialUnknowns>` lists at most, per variable of the table:
+/// within it every row is exact (tower20 lists 15 per variable), past it the file would
+/// grow faster than the structure.
+const LISTED_PER_VARIABLE: usize = 32;
+
 /// The Knowns an output reads, split by causality (1-based table indices, ascending).
 #[derive(Debug, Default, Clone)]
 struct Reads {
@@ -150,7 +155,30 @@ pub fn model_structure(model: &Model, table: &VariableTable) -> (Vec<Unknown>, V
         outputs.push(outputs_row(i, reads, n_inputs));
         initial.push(initial_row(i, reads, n_inputs, n_parameters));
     }
+    fit_budget(&mut initial, LISTED_PER_VARIABLE * table.variables.len());
     (outputs, initial)
+}
+
+/// Omits the longest `<InitialUnknowns>` lists, longest first, until the lists left hold
+/// at most `budget` entries. Exact lists can grow with the square of the structure (every
+/// bar force of a jointed column reads most of its cables and some of the inputs); past
+/// the budget such a row claims all Knowns instead: an over-claim of inputs confined to
+/// Initialization Mode, while `<Outputs>`, which decides loops during a run, stays exact.
+fn fit_budget(rows: &mut [Unknown], budget: usize) {
+    let listed = |u: &Unknown| u.dependencies.as_ref().map_or(0, Vec::len);
+    let mut total: usize = rows.iter().map(listed).sum();
+    if total <= budget {
+        return;
+    }
+    let mut longest: Vec<usize> = (0..rows.len()).filter(|&i| listed(&rows[i]) > 0).collect();
+    longest.sort_by_key(|&i| std::cmp::Reverse(listed(&rows[i])));
+    for i in longest {
+        if total <= budget {
+            break;
+        }
+        total -= listed(&rows[i]);
+        rows[i] = unknown(rows[i].index as usize - 1, None);
+    }
 }
 
 /// An `<Outputs>` row (the Knowns are the inputs): the list, omitted only when it names
