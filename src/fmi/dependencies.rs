@@ -48,10 +48,11 @@ struct Footprint {
 /// connected to another FMU, so no loop can follow, and the file stays linear in the scene.
 const DENSE_ROW: usize = 64;
 
-/// Dependency entries that `<InitialUnknowns>` lists at most, per variable of the table:
-/// within it every row is exact (tower20 lists 15 per variable), past it the file would
-/// grow faster than the structure.
-const LISTED_PER_VARIABLE: usize = 32;
+/// Dependency entries that `<InitialUnknowns>` lists at most: a fixed floor, so that small
+/// structures keep every row exact (tower20 lists 13,455), and beyond it a number per
+/// variable of the table, so that the file grows no faster than the structure.
+const LISTED_FLOOR: usize = 100_000;
+const LISTED_PER_VARIABLE: usize = 8;
 
 /// The Knowns an output reads, split by causality (1-based table indices, ascending).
 #[derive(Debug, Default, Clone)]
@@ -155,7 +156,8 @@ pub fn model_structure(model: &Model, table: &VariableTable) -> (Vec<Unknown>, V
         outputs.push(outputs_row(i, reads, n_inputs));
         initial.push(initial_row(i, reads, n_inputs, n_parameters));
     }
-    fit_budget(&mut initial, LISTED_PER_VARIABLE * table.variables.len());
+    let budget = LISTED_FLOOR.max(LISTED_PER_VARIABLE * table.variables.len());
+    fit_budget(&mut initial, budget);
     (outputs, initial)
 }
 
