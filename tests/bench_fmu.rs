@@ -24,6 +24,20 @@ fn bench(args: &[&str]) -> (bool, String, String) {
 }
 
 #[test]
+fn inputs_keeps_the_three_top_forces() {
+    let (ok, stdout, stderr) = bench(&["--bars", "6", "--inputs"]);
+    assert!(ok, "{stderr}");
+    assert!(stdout.contains("force inputs on the top ring"), "{stdout}");
+    let row = stdout.lines().find(|l| l.starts_with("| 6 |")).unwrap();
+    let mut scene = tower_with_rest_lengths(2, "tower6");
+    scene.solver.method = Method::Rk4;
+    let sim = Simulation::new(Model::new(&scene).unwrap());
+    let variables = VariableTable::new(&sim).variables.len();
+    assert_eq!(row.split('|').nth(2).unwrap().trim(), variables.to_string());
+    assert_eq!(scene.force_inputs.len(), 3);
+}
+
+#[test]
 fn one_row_per_size_with_the_fmus_counts() {
     let (ok, stdout, stderr) = bench(&["--bars", "6,60"]);
     assert!(ok, "{stderr}");

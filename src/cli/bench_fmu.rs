@@ -1,4 +1,5 @@
-//! The FMU at scale: for towers of given bar counts (no inputs), the variables, the sizes of
+//! The FMU at scale: for towers of given bar counts (no inputs, or with the three force
+//! inputs on the top ring), the variables, the sizes of
 //! modelDescription.xml and of the .fmu, the build time, and through fmpy (the helper
 //! fmu/sweep/fmu_timing.py) the time to read the model description, to instantiate and
 //! initialize, and of the first two doSteps.
@@ -36,7 +37,7 @@ pub fn check_bars(bars: &[usize]) -> Result<(), String> {
 }
 
 /// Prints one row per bar count (as each completes); `bars` passed [`check_bars`].
-pub fn run(bars: &[usize], python: &Path, binary: &Path) -> Result<(), String> {
+pub fn run(bars: &[usize], inputs: bool, python: &Path, binary: &Path) -> Result<(), String> {
     if !python.is_file() {
         return Err(format!(
             "--python {}: no such program; pass the Python that has fmpy (bash tests/setup.sh makes .venv)",
@@ -45,14 +46,25 @@ pub fn run(bars: &[usize], python: &Path, binary: &Path) -> Result<(), String> {
     }
     let dir = std::env::temp_dir().join(format!("tensegrity-bench-fmu-{}", std::process::id()));
     std::fs::create_dir_all(&dir).map_err(|e| format!("{}: {e}", dir.display()))?;
-    let result = rows(bars, python, binary, &dir);
+    let result = rows(bars, inputs, python, binary, &dir);
     let _ = std::fs::remove_dir_all(&dir);
     result
 }
 
-fn rows(bars: &[usize], python: &Path, binary: &Path, dir: &Path) -> Result<(), String> {
+fn rows(
+    bars: &[usize],
+    inputs: bool,
+    python: &Path,
+    binary: &Path,
+    dir: &Path,
+) -> Result<(), String> {
+    let kind = if inputs {
+        "force inputs on the top ring"
+    } else {
+        "no inputs"
+    };
     println!(
-        "Towers of elastic cables with explicit rest lengths (rk4 at 1 ms, no inputs); fmpy {}:",
+        "Towers of elastic cables with explicit rest lengths (rk4 at 1 ms, {kind}); fmpy {}:",
         fmpy_version(python)
     );
     println!();
@@ -60,7 +72,9 @@ fn rows(bars: &[usize], python: &Path, binary: &Path, dir: &Path) -> Result<(), 
     println!("|---:|---:|---:|---:|---:|---:|---:|---:|---:|");
     for &b in bars {
         let mut scene = tower(b / 3);
-        scene.force_inputs.clear();
+        if !inputs {
+            scene.force_inputs.clear();
+        }
         let fmu: PathBuf = dir.join(format!("tower{b}.fmu"));
         let started = Instant::now();
         let built = build_fmu(&scene, binary, &fmu)?;

@@ -191,6 +191,9 @@ enum BenchCommand {
         /// Tower sizes in bars (multiples of 3).
         #[arg(long, value_delimiter = ',', default_value = "60,600,6000,60000")]
         bars: Vec<usize>,
+        /// Keep the towers' three force inputs on the top ring.
+        #[arg(long)]
+        inputs: bool,
         /// The Python that has fmpy.
         #[arg(long, default_value = ".venv/bin/python")]
         python: PathBuf,
@@ -284,13 +287,14 @@ pub fn run(cli: Cli) -> Result<(), String> {
             what:
                 Some(BenchCommand::Fmu {
                     bars,
+                    inputs,
                     python,
                     binary,
                 }),
             ..
         } => {
             bench_fmu::check_bars(&bars)?;
-            bench_fmu::run(&bars, &python, &fmu_binary(binary)?)
+            bench_fmu::run(&bars, inputs, &python, &fmu_binary(binary)?)
         }
         Command::Bench {
             what: Some(BenchCommand::Stiff { repeats }),
