@@ -30,37 +30,32 @@ fn pushed_tower(stages: usize) -> Scene {
     scene
 }
 
-fn description_bytes(scene: &Scene) -> usize {
-    golden_model_description(scene)
-        .expect("the tower packages")
-        .len()
+/// The description of `tower(10 * stages)` is 8 to 12 times that of `tower(stages)`.
+fn grows_tenfold(tower: fn(usize) -> Scene, stages: usize) {
+    let bytes = |k: usize| {
+        golden_model_description(&tower(k))
+            .expect("the tower packages")
+            .len()
+    };
+    let (small, large) = (bytes(stages), bytes(10 * stages));
+    let ratio = large as f64 / small as f64;
+    assert!(
+        (8.0..=12.0).contains(&ratio),
+        "{} bars: {small} bytes, {} bars: {large} bytes, ratio {ratio:.2}",
+        3 * stages,
+        30 * stages
+    );
 }
 
 #[test]
 fn a_ten_times_larger_tower_has_at_most_a_twelve_times_larger_description() {
-    let (small, large) = (
-        description_bytes(&loose_tower(20)),
-        description_bytes(&loose_tower(200)),
-    );
-    let ratio = large as f64 / small as f64;
-    assert!(
-        (8.0..=12.0).contains(&ratio),
-        "60 bars: {small} bytes, 600 bars: {large} bytes, ratio {ratio:.2}"
-    );
+    grows_tenfold(loose_tower, 20);
 }
 
 #[test]
 fn a_ten_times_larger_tower_with_inputs_has_at_most_a_twelve_times_larger_description() {
     // From 600 bars, where the exact lists no longer fit, to 6,000 (tower20 is exact).
-    let (small, large) = (
-        description_bytes(&pushed_tower(200)),
-        description_bytes(&pushed_tower(2000)),
-    );
-    let ratio = large as f64 / small as f64;
-    assert!(
-        (8.0..=12.0).contains(&ratio),
-        "600 bars: {small} bytes, 6,000 bars: {large} bytes, ratio {ratio:.2}"
-    );
+    grows_tenfold(pushed_tower, 200);
 }
 
 /// Each `Unknown` of a `<ModelStructure>` section: its variable's name and its
