@@ -1,5 +1,5 @@
 //! Output files that appear whole or not at all. Each is written to a hidden temporary
-//! `.NAME.tmpXXXXXX` beside the target, created exclusively under an unpredictable name
+//! `.NAME.tmpXXXXXX.tensegrity-fmu` beside the target, created exclusively under an unpredictable name
 //! (the `tempfile` crate: `O_EXCL`, so a symlink planted there is never followed), and
 //! renamed over the target when complete: the target keeps its old content until then.
 //!
@@ -59,7 +59,7 @@ pub struct Partial {
 }
 
 impl Partial {
-    /// Creates `.NAME.tmpXXXXXX` beside `target` (after removing what killed runs left
+    /// Creates `.NAME.tmpXXXXXX.tensegrity-fmu` beside `target` (after removing what killed runs left
     /// there) and returns it open for writing. Refuses a target that exists but is not a
     /// regular file: renaming onto a device such as `/dev/null` would replace the device
     /// node itself.
@@ -73,7 +73,7 @@ impl Partial {
                     target.display()
                 ))
             }
-            Ok(meta) => meta.mode() & 0o7777,
+            Ok(meta) => meta.mode() & 0o777, // never setuid, setgid or sticky
             Err(_) => 0o666,
         };
         let cannot = |e: std::io::Error| format!("cannot create {}: {e}", target.display());
@@ -82,6 +82,7 @@ impl Partial {
             let file = Builder::new()
                 .prefix(&prefix)
                 .rand_bytes(6)
+                .suffix(leftovers::SUFFIX)
                 .permissions(Permissions::from_mode(mode))
                 .tempfile_in(&dir)
                 .map_err(cannot)?;
@@ -135,7 +136,7 @@ pub struct PartialDir {
 }
 
 impl PartialDir {
-    /// Creates the empty folder `.NAME.tmpXXXXXX` beside `target`.
+    /// Creates the empty folder `.NAME.tmpXXXXXX.tensegrity-fmu` beside `target`.
     pub fn create(target: &Path) -> Result<Self, String> {
         let (dir, prefix) = temp_place(target)?;
         let cannot = |e: std::io::Error| format!("cannot create {}: {e}", target.display());
@@ -144,10 +145,16 @@ impl PartialDir {
             let tmp = Builder::new()
                 .prefix(&prefix)
                 .rand_bytes(6)
+                .suffix(leftovers::SUFFIX)
                 .permissions(Permissions::from_mode(0o777))
                 .tempdir_in(&dir)
                 .map_err(cannot)?;
-            let lock = File::open(tmp.path()).map_err(cannot)?;
+            let lock = match File::open(tmp.path()) {
+                Ok(lock) => lock,
+                // Another run took it for a leftover between creation and opening.
+                Err(e) if e.kind() == std::io::ErrorKind::NotFound => continue,
+                Err(e) => return Err(cannot(e)),
+            };
             if !lock_and_still_there(&lock, tmp.path()).map_err(cannot)? {
                 continue;
             }
@@ -237,7 +244,7 @@ fn temp_place(target: &Path) -> Result<(PathBuf, std::ffi::OsString), String> {
 /// Locks `file` (just created at `path`) and checks that `path` still names it: another
 /// run's [`leftovers::remove`] may have taken it before the lock.
 fn lock_and_still_there(file: &File, path: &Path) -> std::io::Result<bool> {
-    if !leftovers::try_lock(file)? {
+    if leftovers::try_lock(file)? == leftovers::Lock::Busy {
         return Ok(false);
     }
     leftovers::same_file(file, path)
@@ -310,9 +317,17 @@ mod tests {
             .iter()
             .find(|n| n.starts_with(".out.txt.tmp"))
             .expect("a hidden temporary");
-        assert_eq!(tmp.len(), ".out.txt.tmp".len() + 6, "{tmp}");
+        assert_eq!(
+            tmp.len(),
+            ".out.txt.tmp".len() + 6 + leftovers::SUFFIX.len(),
+            "{tmp}"
+        );
+        assert!(tmp.ends_with(".tensegrity-fmu"), "{tmp}");
         let other = File::open(dir.path().join(tmp)).expect("opened");
-        assert!(!leftovers::try_lock(&other).expect("flock"), "locked");
+        assert_eq!(
+            leftovers::try_lock(&other).expect("flock"),
+            leftovers::Lock::Busy
+        );
         assert_eq!(std::fs::read(&target).expect("read"), b"old");
         partial.commit().expect("committed");
         assert_eq!(std::fs::read(&target).expect("read back"), b"whole");

@@ -31,7 +31,7 @@ fn names(dir: &Path) -> Vec<String> {
 fn temporaries(dir: &Path) -> Vec<String> {
     names(dir)
         .into_iter()
-        .filter(|n| n.starts_with('.') && n.contains(".tmp"))
+        .filter(|n| n.starts_with('.') && n.contains(".tmp") && n.ends_with(".tensegrity-fmu"))
         .collect()
 }
 
@@ -158,21 +158,25 @@ fn symlinks_planted_under_temporary_names_are_never_followed() {
             &["simulate", "prism2", "--time", "0.1", "-o", "out.csv"],
             &[
                 ".out.csv.partial-$$",
-                ".out.csv.tmpAAAAAA",
-                ".out.csv.tmp000000",
+                ".out.csv.tmpAAAAAA.tensegrity-fmu",
+                ".out.csv.tmp000000.tensegrity-fmu",
             ],
         ),
         (
             &["render", "prism2", "--at", "0", "-o", "out.png"],
-            &["out.png", ".out.png.partial-$$", ".out.png.tmpAAAAAA"],
+            &[
+                "out.png",
+                ".out.png.partial-$$",
+                ".out.png.tmpAAAAAA.tensegrity-fmu",
+            ],
         ),
         (
             &["render", "prism2", "--time", "0.1", "-o", "out.gif"],
-            &["out.gif", ".out.gif.tmpAAAAAA"],
+            &["out.gif", ".out.gif.tmpAAAAAA.tensegrity-fmu"],
         ),
         (
             &["render", "prism2", "--time", "0.01", "-o", "out.pvd"],
-            &[".out.pvd.tmp-$$", ".out.pvd.tmpAAAAAA"],
+            &[".out.pvd.tmp-$$", ".out.pvd.tmpAAAAAA.tensegrity-fmu"],
         ),
         // matrw writes to a path: its private file in $TMPDIR had a predictable name.
         (
@@ -185,7 +189,11 @@ fn symlinks_planted_under_temporary_names_are_never_followed() {
         std::fs::write(&victim, "not to be written\n").unwrap();
         let links: Vec<(&str, &Path)> = planted.iter().map(|n| (*n, victim.as_path())).collect();
         let mut links = links;
-        let vtp_links = [".out_vtp.tmp-$$", ".out_vtp.tmpAAAAAA", ".out_vtp.old-$$"];
+        let vtp_links = [
+            ".out_vtp.tmp-$$",
+            ".out_vtp.tmpAAAAAA.tensegrity-fmu",
+            ".out_vtp.old-$$",
+        ];
         if args.contains(&"out.pvd") {
             links.extend(vtp_links.iter().map(|n| (*n, victim_dir.as_path())));
         }
@@ -336,6 +344,11 @@ fn a_killed_runs_temporary_is_removed_by_the_next_run_but_a_live_one_is_not() {
     let left = temporaries(&dir);
     assert_eq!(left.len(), 2, "{left:?}");
     assert!(left[0].starts_with(".dead.csv.tmp") && left[1].starts_with(".live.csv.tmp"));
+    // Another program's hidden temporaries of the same shape are not ours to remove.
+    let foreign = [".notes.txt.tmpAb12Cd", ".cache.tmp000000"];
+    for name in foreign {
+        std::fs::write(dir.join(name), "another program's\n").unwrap();
+    }
 
     let next = Command::new(BIN)
         .args(["simulate", "prism2", "--time", "0.1", "-o", "next.csv"])
@@ -348,5 +361,11 @@ fn a_killed_runs_temporary_is_removed_by_the_next_run_but_a_live_one_is_not() {
     assert_eq!(temporaries(&dir), [left[1].clone()], "the live one is kept");
     signal(&live, libc::SIGTERM);
     live.wait_with_output().unwrap();
-    assert_eq!(names(&dir), ["next.csv"]);
+    for name in foreign {
+        assert_eq!(
+            std::fs::read_to_string(dir.join(name)).unwrap(),
+            "another program's\n"
+        );
+    }
+    assert_eq!(names(&dir), [foreign[1], foreign[0], "next.csv"]);
 }

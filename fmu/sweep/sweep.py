@@ -23,6 +23,7 @@ sys.path.insert(0, str(HERE))  # when imported from elsewhere (tests, the benchm
 
 import sweep_scene  # noqa: E402
 import sweep_spec  # noqa: E402
+import sweep_results  # noqa: E402
 from sweep_results import Results  # noqa: E402
 from sweep_spec import SpecError  # noqa: E402
 
@@ -73,6 +74,7 @@ def run(spec_path, out, workers=2, scheduler=None, resume=False, log=print, forc
         out.mkdir(parents=True, exist_ok=True)
     except OSError as e:
         raise SpecError("-o", f"cannot make the folder {out} ({e.strerror})", "choose a folder you can write") from None
+    sweep_results.held_results(out, resume)
     samples = sweep_spec.samples(spec)
     archives, variants = sweep_scene.build_variants(spec, out, CLI)
     if not archives:

@@ -30,6 +30,18 @@ def header(swept, outputs):
     return ["sample", *swept, "status", *[f"{o}.{s}" for o in outputs for s in STATS]]
 
 
+def held_results(out: Path, resume: bool) -> bool:
+    """Whether `out` holds results; refuses them unless resuming (checked again before
+    anything is built, so that a refusal comes at once)."""
+    path, progress = out / "results.csv", out / "progress.csv"
+    # A header alone (a sweep stopped before its first row) holds nothing to lose.
+    held = path.exists() or (progress.exists() and progress.read_bytes().count(b"\n") > 1)
+    if held and not resume:
+        where = path if path.exists() else progress
+        raise SpecError(str(where), "already holds results", f"run again with --resume to finish them, {ANOTHER}")
+    return held
+
+
 class Results:
     def __init__(self, out: Path, swept, outputs, samples, resume: bool, digests: dict):
         self.out, self.swept, self.outputs, self.samples = Path(out), swept, outputs, samples
@@ -37,12 +49,7 @@ class Results:
         self.header = header(swept, outputs)
         self.done = set()
         sweep_files.remove_leftovers(self.out, ["results.csv", "summary.png", "sweep.json"])
-        # A header alone (a sweep stopped before its first row) holds nothing to lose.
-        held = self.path.exists() or (self.progress.exists() and self.progress.read_bytes().count(b"\n") > 1)
-        if held and not resume:
-            where = self.path if self.path.exists() else self.progress
-            raise SpecError(str(where), "already holds results", f"run again with --resume to finish them, {ANOTHER}")
-        if held:
+        if held_results(self.out, resume):
             self._check_record(digests)
             source = self.progress if self.progress.exists() else self.path
             rows = self._finished(source)

@@ -29,9 +29,10 @@ class SpecError(Exception):
 KNOWN = {"fmu", "scene", "stop_time", "step", "outputs", "warm_start", "parameters",
          "scene_parameters", "random"}
 # Communication points of one run at most: the CLI's `simulate` limit on rows (MAX_ROWS in
-# src/cli/simulate.rs; tests/fmpy/test_sweep_limits.py checks they agree).
+# src/cli/simulate.rs; tests/fmpy/test_sweep_errors.py checks they agree).
 MAX_POINTS = 10**7
 MAX_RUNS = 10**6  # samples of one sweep without --force
+MAX_VARIANTS = 1000  # scene variants (FMUs built) of one sweep without --force
 MAX_RESULT_BYTES = 2e9  # estimated size of results.csv without --force
 CELL_BYTES = 24  # a float's shortest round-trip decimal and its comma, at most
 INT32 = (-2**31, 2**31 - 1)  # fmi2Integer
@@ -74,10 +75,20 @@ class Spec:
 def _number(key, value, positive=True):
     if isinstance(value, bool) or not isinstance(value, (int, float)):
         raise SpecError(key, f"must be a number, got {_show(value)}", f"write e.g. {key} = 1.0")
+    _float(key, value)
     if not math.isfinite(value) or (positive and value <= 0):
         raise SpecError(key, f"must be a {'positive ' * positive}finite number, got {_show(value)}",
                         f"write e.g. {key} = 1.0")
     return float(value)
+
+
+def _float(key, value):
+    """`value` as a float; TOML integers have no bound, floats stop near 1.8e308."""
+    try:
+        return float(value)
+    except OverflowError:
+        raise SpecError(key, f"holds an integer too large for a 64-bit float ({len(str(abs(value)))} digits)",
+                        "give numbers below 1.8e308") from None
 
 
 def _show(value, limit=60):
@@ -98,6 +109,8 @@ def _finite_values(key, value, depth=0):
     """Numbers anywhere in a swept value (a scene list such as gravity too) must be finite."""
     if isinstance(value, float) and not math.isfinite(value):
         raise SpecError(key, f"holds {value!r}", "give finite numbers")
+    if isinstance(value, int) and not isinstance(value, bool):
+        _float(key, value)
     if isinstance(value, dict):
         raise SpecError(key, f"holds a table {_show(value)}", "give numbers, true/false, strings or lists of them")
     if isinstance(value, list):
@@ -236,7 +249,13 @@ def _random(table):
 
 
 def check_size(spec: Spec, force: bool):
-    """Refuses, before any work, a sweep past MAX_RUNS samples or MAX_RESULT_BYTES of results."""
+    """Refuses, before any work, a sweep past MAX_RUNS samples, MAX_RESULT_BYTES of results
+    or MAX_VARIANTS scene variants (each an FMU to build)."""
+    variants = math.prod(len(v) for v in spec.scene_parameters.values())
+    if variants > MAX_VARIANTS and not force:
+        raise SpecError("scene_parameters", f"the sweep builds {variants:,} FMUs, one per scene variant "
+                        f"(about 0.2 s and 1.5 MB each), more than the limit of {MAX_VARIANTS:,}",
+                        "sweep fewer scene values (swept FMU parameters need no build), or pass --force")
     runs = spec.runs()
     columns = 2 + len(spec.swept()) + 3 * len(spec.outputs)
     size = runs * columns * CELL_BYTES

@@ -44,11 +44,11 @@ pub fn run(bars: &[usize], inputs: bool, python: &Path, binary: &Path) -> Result
             python.display()
         ));
     }
-    let dir = std::env::temp_dir().join(format!("tensegrity-bench-fmu-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).map_err(|e| format!("{}: {e}", dir.display()))?;
-    let result = rows(bars, inputs, python, binary, &dir);
-    let _ = std::fs::remove_dir_all(&dir);
-    result
+    let dir = tempfile::Builder::new()
+        .prefix("tensegrity-bench-fmu")
+        .tempdir()
+        .map_err(|e| format!("cannot create a temporary folder: {e}"))?;
+    rows(bars, inputs, python, binary, dir.path())
 }
 
 fn rows(

@@ -52,6 +52,11 @@ pub fn stop_requested() -> bool {
     STOP.load(Ordering::Relaxed)
 }
 
+/// Forgets a stop asked for too late: the loop had already reached its end.
+pub fn forget_stop() {
+    STOP.store(false, Ordering::SeqCst);
+}
+
 /// The panic message on one line: that it is a bug, where, and where to report it.
 fn report_panics_as_bugs() {
     std::panic::set_hook(Box::new(|info| {

@@ -136,6 +136,10 @@ pub fn simulate(scene: Scene, request: Request) -> Result<(), String> {
     let w = rows.finish().map_err(io)?;
     drop(w.into_inner().map_err(|e| io(e.into_error()))?);
     partial.commit()?;
+    // A Ctrl-C during the last row came too late to stop anything: the run is whole.
+    if interrupt::stop_requested() && (last > time || isclose(last, time)) {
+        interrupt::forget_stop();
+    }
     if interrupt::stop_requested() {
         eprintln!(
             "interrupted at t = {last} s of {time} s: {} holds the {written} rows from t = 0 to {last} s",

@@ -1,5 +1,5 @@
-//! What killed runs left: hidden `.NAME.tmpXXXXXX` files and folders that no live process
-//! holds locked. A process writing one holds an exclusive `flock` on it from creation to
+//! What killed runs left: hidden `.NAME.tmpXXXXXX.tensegrity-fmu` files and folders that no
+//! live process holds locked (the suffix keeps other programs' temporaries out of reach). A process writing one holds an exclusive `flock` on it from creation to
 //! the end, so whatever can be locked here has no writer left.
 
 use std::fs::File;
@@ -26,7 +26,9 @@ pub fn remove(dir: &Path) {
         else {
             continue;
         };
-        if !matches!(try_lock(&file), Ok(true)) || !matches!(same_file(&file, &path), Ok(true)) {
+        if !matches!(try_lock(&file), Ok(Lock::Taken))
+            || !matches!(same_file(&file, &path), Ok(true))
+        {
             continue;
         }
         let removed = if path.is_dir() {
@@ -43,8 +45,15 @@ pub fn remove(dir: &Path) {
     }
 }
 
-/// `.NAME.tmpXXXXXX`: a dot, a name, `.tmp` and six letters or digits.
+/// The end of every temporary's name: only names of this program's are ever removed.
+pub const SUFFIX: &str = ".tensegrity-fmu";
+
+/// `.NAME.tmpXXXXXX.tensegrity-fmu`: a dot, a name, `.tmp`, six letters or digits and
+/// [`SUFFIX`].
 fn is_leftover_name(name: &[u8]) -> bool {
+    let Some(name) = name.strip_suffix(SUFFIX.as_bytes()) else {
+        return false;
+    };
     let n = name.len();
     n >= ".x.tmp".len() + 6
         && name[0] == b'.'
@@ -52,16 +61,28 @@ fn is_leftover_name(name: &[u8]) -> bool {
         && name[n - 6..].iter().all(u8::is_ascii_alphanumeric)
 }
 
-/// Takes an exclusive advisory lock on `file` without waiting: false if another open file
-/// (of this process or another) holds one.
-pub fn try_lock(file: &File) -> std::io::Result<bool> {
+/// What an attempt to lock a file found.
+#[derive(Debug, PartialEq, Eq)]
+pub enum Lock {
+    /// This open file now holds the exclusive lock.
+    Taken,
+    /// Another open file (of this process or another) holds one.
+    Busy,
+    /// The filesystem has no locks (some network mounts): nothing can prove there that a
+    /// temporary is dead, so none is taken for a leftover, and writing goes on unlocked.
+    Unsupported,
+}
+
+/// Takes an exclusive advisory lock on `file` without waiting.
+pub fn try_lock(file: &File) -> std::io::Result<Lock> {
     // SAFETY: flock on a descriptor that `file` keeps open.
     if unsafe { libc::flock(file.as_raw_fd(), libc::LOCK_EX | libc::LOCK_NB) } == 0 {
-        return Ok(true);
+        return Ok(Lock::Taken);
     }
     let e = std::io::Error::last_os_error();
     match e.raw_os_error() {
-        Some(libc::EWOULDBLOCK) => Ok(false),
+        Some(libc::EWOULDBLOCK) => Ok(Lock::Busy),
+        Some(libc::ENOLCK | libc::EOPNOTSUPP) => Ok(Lock::Unsupported),
         _ => Err(e),
     }
 }
@@ -80,9 +101,12 @@ mod tests {
     use super::*;
 
     #[test]
-    fn only_hidden_temporaries_are_leftovers() {
+    fn only_hidden_temporaries_of_this_program_are_leftovers() {
         for name in [".out.csv.tmpA1b2C3", ".x_vtp.tmp000000", ".a.tmpzzzzzz"] {
-            assert!(is_leftover_name(name.as_bytes()), "{name}");
+            let ours = format!("{name}{SUFFIX}");
+            assert!(is_leftover_name(ours.as_bytes()), "{ours}");
+            // Another program's temporary of the same shape is not ours to remove.
+            assert!(!is_leftover_name(name.as_bytes()), "{name}");
         }
         for name in [
             "out.csv.tmpA1b2C3",
@@ -92,7 +116,8 @@ mod tests {
             ".tmpA1b2C3",
             ".out.csv",
         ] {
-            assert!(!is_leftover_name(name.as_bytes()), "{name}");
+            let ours = format!("{name}{SUFFIX}");
+            assert!(!is_leftover_name(ours.as_bytes()), "{ours}");
         }
     }
 }

@@ -80,8 +80,6 @@ pub struct Simulation {
     pub locate_events: bool,
     events: events::Events,
     stability: Stability,
-    /// Why dopri5's steps are short, once a call ran out of `solver.max_steps`.
-    short_steps: Option<String>,
     warnings: Vec<String>,
 }
 
@@ -106,7 +104,6 @@ impl Clone for Simulation {
             locate_events: self.locate_events,
             events: self.events.clone(),
             stability: self.stability.clone(),
-            short_steps: self.short_steps.clone(),
             warnings: self.warnings.clone(),
         }
     }
@@ -186,7 +183,6 @@ impl Simulation {
             locate_events: model.solver.locate_events,
             events: events::Events::new(&model),
             stability: Stability::default(),
-            short_steps: None,
             advance_start: State {
                 time: 0.0,
                 y: y.clone(),

@@ -147,24 +147,20 @@ impl Simulation {
     }
 
     /// Why the adaptive method's steps are short and the fixes, for a call that ran out of
-    /// `solver.max_steps`: worked out at the first such call and kept (the model does not
-    /// change; the allocation happens once, not per step).
+    /// `solver.max_steps`, from the current inputs (worked out per refusal, never per step).
     pub(super) fn short_steps_note(&mut self) -> String {
-        if self.short_steps.is_none() {
-            let (pace, rate, per_second) = self.adaptive_pace();
-            let why = match pace {
-                Pace::Stability => "at its stability bound for",
-                _ => "to follow the motion set by",
-            };
-            self.short_steps = Some(format!(
-                "Its steps are about {:.2e} s, {why} {}. Use solver.method = \"sdirk3\" \
-                 (implicit, stable at any stiffness: fixed steps of solver.step_size), a softer \
-                 element, shorter communication steps, or raise solver.max_steps",
-                1.0 / per_second,
-                rate.describe(&self.model, &self.inputs)
-            ));
-        }
-        self.short_steps.clone().unwrap_or_default()
+        let (pace, rate, per_second) = self.adaptive_pace();
+        let why = match pace {
+            Pace::Stability => "at its stability bound for",
+            _ => "to follow the motion set by",
+        };
+        format!(
+            "Its steps are about {:.2e} s, {why} {}. Use solver.method = \"sdirk3\" \
+             (implicit, stable at any stiffness: fixed steps of solver.step_size), a softer \
+             element, shorter communication steps, or raise solver.max_steps",
+            1.0 / per_second,
+            rate.describe(&self.model, &self.inputs)
+        )
     }
 
     /// Wall time per internal step attempt, s, measured on a copy with steps of `step`

@@ -168,6 +168,30 @@ def test_results_past_2_gb_are_refused_even_with_few_runs(tmp_path, capsys):
     assert f"200,000 rows of 600 columns, about {size:.3g} GB" in err and size > 2
 
 
+def test_scene_variants_past_the_build_limit_are_refused_before_any_build(tmp_path, capsys):
+    values = [float(v) for v in range(40)]
+    text = (f'scene = "prism2-elastic"\n{TOP}[scene_parameters]\n"cables[*].stiffness" = {values}\n'
+            f'"prestress.min_tension" = {values}\n')
+    err = refused(tmp_path, capsys, text)
+    assert err == ("error: scene_parameters: the sweep builds 1,600 FMUs, one per scene variant (about 0.2 s and "
+                   "1.5 MB each), more than the limit of 1,000; sweep fewer scene values (swept FMU parameters need "
+                   "no build), or pass --force")
+    assert not (tmp_path / "out").exists()
+    assert sweep_spec.check_size(sweep_spec.load(tmp_path / "spec.toml"), force=True) == 1600
+
+
+@pytest.mark.parametrize("lines, key", [
+    (f'stop_time = {10 ** 400}\nstep = 0.01\n', "stop_time"),
+    (f'stop_time = 1.0\nstep = 0.01\n[parameters]\n"node[7].fx" = [1.0, {10 ** 400}]\n', 'parameters."node[7].fx"'),
+    (f'stop_time = 1.0\nstep = 0.01\n[random]\nn = 2\nseed = 1\n[random.ranges]\n"a" = [0, {10 ** 400}]\n',
+     'random.ranges."a"'),
+])
+def test_integers_beyond_a_float_are_refused_in_one_line(tmp_path, capsys, lines, key):
+    err = refused(tmp_path, capsys, f'fmu = "x.fmu"\noutputs = ["a"]\n{lines}')
+    assert err == (f"error: {key}: holds an integer too large for a 64-bit float (401 digits); "
+                   "give numbers below 1.8e308"), err
+
+
 def test_the_points_per_run_limit_is_the_cli_row_limit():
     text = (REPO / "src" / "cli" / "simulate.rs").read_text()
     rust = float(re.search(r"pub const MAX_ROWS: f64 = ([0-9.e]+);", text).group(1))
@@ -260,6 +284,15 @@ def copy_of(finished, tmp_path):
     root, text = finished
     shutil.copytree(root / "out", tmp_path / "out")
     return text
+
+
+def test_a_folder_with_results_is_refused_before_any_fmu_is_built(finished, tmp_path, capsys):
+    copy_of(finished, tmp_path)
+    text = f'scene = "prism2-elastic"\n{TOP}[scene_parameters]\n"prestress.min_tension" = [5.0, 10.0]\n'
+    err = refused(tmp_path, capsys, text)
+    assert err.startswith(f"error: {tmp_path / 'out' / 'results.csv'}: already holds results; run again with "
+                          "--resume"), err
+    assert not (tmp_path / "out" / "fmus").exists()
 
 
 def test_resume_refuses_a_changed_spec_or_fmu_and_says_which(finished, fmus, tmp_path, capsys):

@@ -69,7 +69,8 @@ pub fn kinds<'a>(variables: &[&'a Variable]) -> Vec<Kind<'a>> {
     order
 }
 
-/// Indices as runs, `1..40000` or `1..3, 61..63`; past eight runs, the count of the rest.
+/// Indices as runs, `1..40000` or `1..3, 61..63`; past eight runs, the first eight and the
+/// count of all runs.
 pub fn runs(indices: &[u64]) -> String {
     let mut parts: Vec<String> = Vec::new();
     let mut k = 0;
