@@ -12,7 +12,8 @@ mod fuzz_support;
 
 use proptest::strategy::Strategy;
 
-use fuzz_support::generate::{corpus, mutated, structured};
+use fuzz_support::generate::structured;
+use fuzz_support::mutate::{corpus, mutated};
 use fuzz_support::{describe, fuzz, settings};
 
 /// Inputs in the test suite's run: a few seconds.

@@ -4,6 +4,7 @@
 #![allow(dead_code)]
 
 pub mod generate;
+pub mod mutate;
 pub mod pipeline;
 
 use std::cell::{Cell, RefCell};
