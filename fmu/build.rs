@@ -79,9 +79,27 @@ fn main() {
                 path.display()
             );
         }
-        // Windows and macOS get their lists here, from the same names, when those targets
-        // are built: a module-definition file passed as `/DEF:<file>` (MSVC) or
-        // `-Wl,<file>` (MinGW), and `-Wl,-exported_symbols_list,<file>` listing `_<name>`.
+        // PE: a module-definition file naming the exports (MinGW's linker takes it as an
+        // input file); rustc's own list of every `#[no_mangle]` symbol is pruned by name.
+        "windows" => {
+            let def: String = FMI2_FUNCTIONS.iter().map(|f| format!("    {f}\n")).collect();
+            let path = out.join("fmi2-exports.def");
+            std::fs::write(&path, format!("EXPORTS\n{def}")).expect("write the .def file");
+            println!("cargo:rustc-cdylib-link-arg={}", path.display());
+            for name in DEPENDENCY_EXPORTS {
+                println!("cargo:rustc-cdylib-link-arg=-Wl,--exclude-symbols={name}");
+            }
+        }
+        // Mach-O: the exported symbols, each with the leading underscore of C names.
+        "macos" => {
+            let list: String = FMI2_FUNCTIONS.iter().map(|f| format!("_{f}\n")).collect();
+            let path = out.join("fmi2-exports.txt");
+            std::fs::write(&path, list).expect("write the exported symbols list");
+            println!(
+                "cargo:rustc-cdylib-link-arg=-Wl,-exported_symbols_list,{}",
+                path.display()
+            );
+        }
         _ => {}
     }
 }
