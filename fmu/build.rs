@@ -79,19 +79,19 @@ fn main() {
                 path.display()
             );
         }
-        // PE: a module-definition file naming the exports (MinGW's linker takes it as an
-        // input file); rustc's own list of every `#[no_mangle]` symbol is pruned by name.
+        // PE: a module-definition file naming the exports, which MinGW's linker takes as
+        // an input file (after rustc's own list).
         "windows" => {
             let def: String = FMI2_FUNCTIONS.iter().map(|f| format!("    {f}\n")).collect();
             let path = out.join("fmi2-exports.def");
             std::fs::write(&path, format!("EXPORTS\n{def}")).expect("write the .def file");
-            println!("cargo:rustc-cdylib-link-arg={}", path.display());
-            for name in DEPENDENCY_EXPORTS {
-                println!("cargo:rustc-cdylib-link-arg=-Wl,--exclude-symbols={name}");
-            }
+            println!("cargo:rustc-cdylib-link-arg=-Wl,{}", path.display());
         }
-        // Mach-O: the exported symbols, each with the leading underscore of C names.
+        // Mach-O: the exported symbols, each with the leading underscore of C names, for
+        // Apple's linker (zig's has no export list: cargo-zigbuild drops the option), and
+        // no dylib that nothing uses (libc's iconv functions name libiconv).
         "macos" => {
+            println!("cargo:rustc-cdylib-link-arg=-Wl,-dead_strip_dylibs");
             let list: String = FMI2_FUNCTIONS.iter().map(|f| format!("_{f}\n")).collect();
             let path = out.join("fmi2-exports.txt");
             std::fs::write(&path, list).expect("write the exported symbols list");
