@@ -24,7 +24,7 @@ fn compare(fmu: &Extracted, runner: Runner) {
         fmu.positions.len()
     );
     assert!(diff <= TOLERANCE, "{runner:?}: {diff:e} m > {TOLERANCE:e} m");
-    // The structure moved (the comparison is not of start positions only).
+    // The pushed structure moved (the comparison is not of start positions only).
     let start = positions_at(fmu, Runner::Native, "0", &[]);
     assert!(max_difference(&start.positions, &linux.positions) > 1e-6);
 }

@@ -1,8 +1,8 @@
 /* A minimal FMI 2.0 co-simulation importer for the platform tests (tests/platforms.rs):
- *   importer LIBRARY RESOURCE_URI GUID STOP_TIME STEP VR...
+ *   importer LIBRARY RESOURCE_URI GUID STOP_TIME STEP [VR=VALUE | VR]...
  * loads the binary (LoadLibrary/GetProcAddress on Windows, dlopen/dlsym elsewhere),
- * instantiates it with logging on, steps from 0 to STOP_TIME and prints `VR VALUE` (%.17g)
- * for each value reference. Log messages go to stderr. Exit status 1 on any failure. */
+ * instantiates it with logging on, sets each VR=VALUE input, steps from 0 to STOP_TIME and
+ * prints `VR VALUE` (%.17g) for each other value reference. Log messages go to stderr. Exit status 1 on any failure. */
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -62,12 +62,13 @@ int main(int argc, char **argv) {
   int (*enter)(Component), (*exit_init)(Component), (*terminate)(Component);
   int (*do_step)(Component, double, double, int);
   int (*get_real)(Component, const ValueReference *, size_t, double *);
+  int (*set_real)(Component, const ValueReference *, size_t, const double *);
   void (*free_instance)(Component);
   Component c;
   double stop, step;
   long i, steps;
   if (argc < 7) {
-    fprintf(stderr, "usage: importer LIBRARY RESOURCE_URI GUID STOP_TIME STEP VR...\n");
+    fprintf(stderr, "usage: importer LIBRARY RESOURCE_URI GUID STOP_TIME STEP [VR=VALUE | VR]...\n");
     return 2;
   }
   library = LOAD(argv[1]);
@@ -81,6 +82,7 @@ int main(int argc, char **argv) {
   *(void **)&exit_init = symbol("fmi2ExitInitializationMode");
   *(void **)&do_step = symbol("fmi2DoStep");
   *(void **)&get_real = symbol("fmi2GetReal");
+  *(void **)&set_real = symbol("fmi2SetReal");
   *(void **)&terminate = symbol("fmi2Terminate");
   *(void **)&free_instance = symbol("fmi2FreeInstance");
   stop = atof(argv[4]);
@@ -93,11 +95,21 @@ int main(int argc, char **argv) {
   CHECK(setup(c, 0, 0.0, 0.0, 1, stop));
   CHECK(enter(c));
   CHECK(exit_init(c));
+  for (i = 6; i < argc; i++) {
+    char *end;
+    ValueReference vr = (ValueReference)strtoul(argv[i], &end, 10);
+    double value;
+    if (*end != '=') continue;
+    value = atof(end + 1);
+    CHECK(set_real(c, &vr, 1, &value));
+  }
   steps = (long)(stop / step + 0.5);
   for (i = 0; i < steps; i++) CHECK(do_step(c, i * step, step, 1));
   for (i = 6; i < argc; i++) {
-    ValueReference vr = (ValueReference)strtoul(argv[i], NULL, 10);
+    char *end;
+    ValueReference vr = (ValueReference)strtoul(argv[i], &end, 10);
     double value;
+    if (*end == '=') continue;
     CHECK(get_real(c, &vr, 1, &value));
     printf("%u %.17g\n", vr, value);
   }

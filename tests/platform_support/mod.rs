@@ -64,6 +64,8 @@ pub struct Extracted {
     pub guid: String,
     /// Value references of the node positions (outputs `node[i].x|y|z`).
     pub positions: Vec<u32>,
+    /// The force input along x on the last node, pushed during the runs.
+    pub push: u32,
 }
 
 impl Extracted {
@@ -109,21 +111,35 @@ fn extract(scene: &str) -> Extracted {
         Some(text[start..start + text[start..].find('"')?].to_string())
     };
     let guid = attr(&xml, "guid").expect("guid");
-    let positions = xml
+    let variables: Vec<(String, String, u32)> = xml
         .split("<ScalarVariable ")
         .skip(1)
-        .map(|v| &v[..v.find('>').unwrap()])
-        .filter(|v| attr(v, "causality").as_deref() == Some("output"))
-        .filter(|v| {
-            let name = attr(v, "name").unwrap();
-            name.starts_with("node[") && [".x", ".y", ".z"].iter().any(|e| name.ends_with(e))
+        .map(|v| format!(" {}", &v[..v.find('>').unwrap()]))
+        .map(|v| {
+            let vr = attr(&v, "valueReference").unwrap().parse().unwrap();
+            (attr(&v, "name").unwrap(), attr(&v, "causality").unwrap_or_default(), vr)
         })
-        .map(|v| attr(v, "valueReference").unwrap().parse().unwrap())
         .collect();
+    let positions = variables
+        .iter()
+        .filter(|(name, causality, _)| {
+            causality == "output"
+                && name.starts_with("node[")
+                && [".x", ".y", ".z"].iter().any(|e| name.ends_with(e))
+        })
+        .map(|v| v.2)
+        .collect();
+    let push = variables
+        .iter()
+        .filter(|(name, causality, _)| causality == "input" && name.ends_with(".fx"))
+        .map(|v| v.2)
+        .next_back()
+        .expect("a force input");
     Extracted {
         dir,
         guid,
         positions,
+        push,
     }
 }
 
@@ -187,7 +203,8 @@ pub struct Run {
     pub log: String,
 }
 
-/// Runs the importer of `runner` on `fmu` for `stop` s at 10 ms steps, with `env` set.
+/// Runs the importer of `runner` on `fmu` for `stop` s at 10 ms steps, with `env` set,
+/// pushing the last node along x with 5 N.
 pub fn simulate(fmu: &Extracted, runner: Runner, stop: &str, env: &[(&str, &str)]) -> Output {
     let (linux, win, arm) = importers();
     let resources = fmu.dir.join("resources");
@@ -216,6 +233,7 @@ pub fn simulate(fmu: &Extracted, runner: Runner, stop: &str, env: &[(&str, &str)
         }
     };
     cmd.arg(&fmu.guid).args([stop, "0.01"]);
+    cmd.arg(format!("{}=5", fmu.push));
     cmd.args(fmu.positions.iter().map(u32::to_string));
     cmd.env_remove("TENSEGRITY_SIMD").envs(env.iter().copied());
     cmd.output()
