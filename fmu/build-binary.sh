@@ -4,7 +4,8 @@
 #   linux64        x86_64-unknown-linux-gnu, against glibc 2.28 stubs (RHEL 8, Ubuntu 20.04)
 #   win64          x86_64-pc-windows-gnu, MinGW runtime linked in statically
 #   darwin64       x86_64 + arm64 joined into one universal dylib (cargo-zigbuild's
-#                  universal2-apple-darwin), macOS 10.12 / 11 and newer
+#                  universal2-apple-darwin), macOS 10.12 / 11 and newer, linked by
+#                  fmu/ld64.sh (rust-lld with an export list, which zig's linker lacks)
 #   aarch64-linux  aarch64-unknown-linux-gnu, glibc 2.28
 # `--linux64-only` builds the first alone (the quickstart); other arguments go to cargo.
 # A platform whose rustup target is missing is skipped with a note (tests/setup.sh adds
@@ -63,11 +64,26 @@ for p in "${platforms[@]}"; do
   built+=("$p")
 done
 
+# macOS: rustc drives fmu/ld64.sh as ld64.lld through a link named rust-lld, against zig's
+# libSystem stubs (libc, libm and libiconv resolve to it too; nothing of iconv is used).
+config=()
+if [[ " ${built[*]} " == *" darwin64 "* ]]; then
+  stubs=$repo/target/ld64
+  zig_darwin=$(.venv/bin/python -c 'import ziglang, os; print(os.path.dirname(ziglang.__file__))')/lib/libc/darwin
+  mkdir -p "$stubs"
+  ln -sf "$repo/fmu/ld64.sh" "$stubs/rust-lld"
+  for l in System c m iconv; do ln -sf "$zig_darwin/libSystem.tbd" "$stubs/lib$l.tbd"; done
+  export FMU_LD64_STUBS=$stubs
+  for t in x86_64-apple-darwin aarch64-apple-darwin; do
+    config+=(--config "target.$t.linker='$stubs/rust-lld'")
+  done
+fi
+
 # Run from fmu/, not from the repository root: zig prints its include folders relative to
 # the working directory when they lie below it (.venv/...), cargo-zigbuild hands them to
 # bindgen (fmi-sys) as they are, and the build script, run elsewhere, then finds no stddef.h.
 cd fmu
-cargo zigbuild --release -p tensegrity-fmu-binary "${targets[@]}" "${args[@]}"
+cargo zigbuild --release -p tensegrity-fmu-binary "${targets[@]}" "${config[@]}" "${args[@]}"
 for p in "${built[@]}"; do
   echo "$repo/target/$(file_of "$p")"
 done

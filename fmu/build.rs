@@ -82,13 +82,16 @@ fn main() {
         // PE: a module-definition file naming the exports, which MinGW's linker takes as
         // an input file (after rustc's own list).
         "windows" => {
-            let def: String = FMI2_FUNCTIONS.iter().map(|f| format!("    {f}\n")).collect();
+            let def: String = FMI2_FUNCTIONS
+                .iter()
+                .map(|f| format!("    {f}\n"))
+                .collect();
             let path = out.join("fmi2-exports.def");
             std::fs::write(&path, format!("EXPORTS\n{def}")).expect("write the .def file");
             println!("cargo:rustc-cdylib-link-arg=-Wl,{}", path.display());
         }
-        // Mach-O: the exported symbols, each with the leading underscore of C names, for
-        // Apple's linker (zig's has no export list: cargo-zigbuild drops the option), and
+        // Mach-O: the exported symbols, each with the leading underscore of C names (for
+        // ld64 or ld64.lld, which fmu/ld64.sh runs: zig's linker has no export list), and
         // no dylib that nothing uses (libc's iconv functions name libiconv).
         "macos" => {
             println!("cargo:rustc-cdylib-link-arg=-Wl,-dead_strip_dylibs");

@@ -15,7 +15,9 @@ pub fn forced_scalar() -> Result<bool, String> {
         Ok(v) => Err(format!(
             "{SIMD_VAR}={v} is not a kernel choice: set it to `scalar` or `auto`, or unset it"
         )),
-        Err(e) => Err(format!("{SIMD_VAR}: {e}: set it to `scalar` or `auto`, or unset it")),
+        Err(e) => Err(format!(
+            "{SIMD_VAR}: {e}: set it to `scalar` or `auto`, or unset it"
+        )),
     }
 }
 

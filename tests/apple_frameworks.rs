@@ -45,7 +45,11 @@ fn sources() -> BTreeMap<String, PathBuf> {
         .expect("packages")
         .iter()
         .map(|p| {
-            let key = format!("{} v{}", p["name"].as_str().unwrap(), p["version"].as_str().unwrap());
+            let key = format!(
+                "{} v{}",
+                p["name"].as_str().unwrap(),
+                p["version"].as_str().unwrap()
+            );
             let manifest = Path::new(p["manifest_path"].as_str().unwrap());
             (key, manifest.parent().unwrap().to_path_buf())
         })
@@ -70,7 +74,9 @@ fn framework_crates(package: &str, target: &str) -> Vec<String> {
     dependencies(package, target)
         .into_iter()
         .filter(|krate| {
-            let dir = sources.get(krate).unwrap_or_else(|| panic!("{krate}: no source"));
+            let dir = sources
+                .get(krate)
+                .unwrap_or_else(|| panic!("{krate}: no source"));
             // The library and the build script (not tests/ nor target/ of this workspace).
             ["src", "build.rs", "build"]
                 .iter()

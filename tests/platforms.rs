@@ -23,7 +23,10 @@ fn compare(fmu: &Extracted, runner: Runner) {
         fmu.dir.display(),
         fmu.positions.len()
     );
-    assert!(diff <= TOLERANCE, "{runner:?}: {diff:e} m > {TOLERANCE:e} m");
+    assert!(
+        diff <= TOLERANCE,
+        "{runner:?}: {diff:e} m > {TOLERANCE:e} m"
+    );
     // The pushed structure moved (the comparison is not of start positions only).
     let start = positions_at(fmu, Runner::Native, "0", &[]);
     assert!(max_difference(&start.positions, &linux.positions) > 1e-6);
@@ -66,7 +69,9 @@ fn tensegrity_simd_scalar_forces_the_portable_kernels_with_the_same_positions() 
             auto.log
         );
         assert!(
-            scalar.log.contains("kernels: scalar (TENSEGRITY_SIMD=scalar)"),
+            scalar
+                .log
+                .contains("kernels: scalar (TENSEGRITY_SIMD=scalar)"),
             "{runner:?}: {}",
             scalar.log
         );

@@ -340,7 +340,11 @@ pub fn run(cli: Cli) -> Result<(), String> {
             platforms,
         } => {
             let binaries = fmu_binaries(binary, platforms.as_deref())?;
-            build(scene.as_deref().unwrap_or(BUILTIN_DEFAULT), output, &binaries)
+            build(
+                scene.as_deref().unwrap_or(BUILTIN_DEFAULT),
+                output,
+                &binaries,
+            )
         }
     }
 }

@@ -10,9 +10,9 @@ use super::description::{
     generation_tool, iso8601_utc, model_description, model_identifier, Provenance,
 };
 use super::documentation::index_html;
-use super::variables::VariableTable;
 use super::guid_for;
 use super::platforms::{from_these_sources, Binary, LINUX64};
+use super::variables::VariableTable;
 use crate::partial::Partial;
 use crate::render::{self, picture, Frames};
 use crate::scene::Scene;

@@ -3,9 +3,9 @@
 
 #![allow(dead_code)] // each suite uses part of it
 
+use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
-use std::collections::BTreeMap;
 use std::sync::{Mutex, OnceLock};
 
 pub const REPO: &str = env!("CARGO_MANIFEST_DIR");
@@ -117,7 +117,11 @@ fn extract(scene: &str) -> Extracted {
         .map(|v| format!(" {}", &v[..v.find('>').unwrap()]))
         .map(|v| {
             let vr = attr(&v, "valueReference").unwrap().parse().unwrap();
-            (attr(&v, "name").unwrap(), attr(&v, "causality").unwrap_or_default(), vr)
+            (
+                attr(&v, "name").unwrap(),
+                attr(&v, "causality").unwrap_or_default(),
+                vr,
+            )
         })
         .collect();
     let positions = variables
@@ -167,7 +171,15 @@ pub fn importers() -> &'static (PathBuf, PathBuf, PathBuf) {
             .arg("-ladvapi32"));
         let arm = dir.join("importer-aarch64");
         run(Command::new(Path::new(REPO).join(".venv/bin/python"))
-            .args(["-m", "ziglang", "cc", "-target", "aarch64-linux-gnu.2.28", "-O2", "-o"])
+            .args([
+                "-m",
+                "ziglang",
+                "cc",
+                "-target",
+                "aarch64-linux-gnu.2.28",
+                "-O2",
+                "-o",
+            ])
             .arg(&arm)
             .arg(&source));
         // Creates the Wine prefix now, not in tests running side by side (a usage error).
