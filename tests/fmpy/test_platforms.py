@@ -60,3 +60,16 @@ def test_an_unknown_platform_is_a_one_line_error(cli, tmp_path):
         "linux64,win64,darwin64,aarch64-linux\n"
     )
     assert not (tmp_path / "x.fmu").exists()
+
+
+def test_binary_without_linux64_is_a_one_line_error(cli, tmp_path):
+    res = subprocess.run(
+        [str(cli), "build", "prism2", "-o", str(tmp_path / "x.fmu"), "--platforms", "win64",
+         "--binary", "target/release/libtensegrity_fmu_binary.so"],
+        capture_output=True,
+        text=True,
+    )
+    assert res.returncode != 0
+    assert res.stderr == (
+        "error: --binary is the linux64 binary: add linux64 to --platforms or drop --binary\n"
+    )
