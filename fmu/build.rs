@@ -91,10 +91,14 @@ fn main() {
             println!("cargo:rustc-cdylib-link-arg=-Wl,{}", path.display());
         }
         // Mach-O: the exported symbols, each with the leading underscore of C names (for
-        // ld64 or ld64.lld, which fmu/ld64.sh runs: zig's linker has no export list), and
-        // no dylib that nothing uses (libc's iconv functions name libiconv).
+        // ld64 or ld64.lld, which fmu/ld64.sh runs: zig's linker has no export list), no
+        // dylib that nothing uses (libc's iconv functions name libiconv).
         "macos" => {
             println!("cargo:rustc-cdylib-link-arg=-Wl,-dead_strip_dylibs");
+            // The library's own name, in place of the path it was linked at.
+            println!(
+                "cargo:rustc-cdylib-link-arg=-Wl,-install_name,@rpath/libtensegrity_fmu_binary.dylib"
+            );
             let list: String = FMI2_FUNCTIONS.iter().map(|f| format!("_{f}\n")).collect();
             let path = out.join("fmi2-exports.txt");
             std::fs::write(&path, list).expect("write the exported symbols list");
