@@ -104,6 +104,22 @@ fn the_darwin64_dylib_is_universal_exports_the_fmi2_functions_and_links_libsyste
                 .arg(format!("--arch={arch}"))
                 .arg(&dylib),
         );
+        // The macOS it needs at least, as docs/fmu.md gives it.
+        let headers = stdout(
+            Command::new("llvm-objdump")
+                .args(["--macho", "--private-headers"])
+                .arg(format!("--arch={arch}"))
+                .arg(&dylib),
+        );
+        let minimum = if arch == "x86_64" {
+            "version 10.12"
+        } else {
+            "minos 11.0"
+        };
+        assert!(
+            headers.lines().any(|l| l.trim() == minimum),
+            "{arch}: {minimum}"
+        );
         // The file name, the library's own install name, then the libraries it loads.
         let libraries: Vec<&str> = used
             .lines()
