@@ -79,9 +79,34 @@ fn main() {
                 path.display()
             );
         }
-        // Windows and macOS get their lists here, from the same names, when those targets
-        // are built: a module-definition file passed as `/DEF:<file>` (MSVC) or
-        // `-Wl,<file>` (MinGW), and `-Wl,-exported_symbols_list,<file>` listing `_<name>`.
+        // PE: a module-definition file naming the exports, which MinGW's linker takes as
+        // an input file (after rustc's own list).
+        "windows" => {
+            let def: String = FMI2_FUNCTIONS
+                .iter()
+                .map(|f| format!("    {f}\n"))
+                .collect();
+            let path = out.join("fmi2-exports.def");
+            std::fs::write(&path, format!("EXPORTS\n{def}")).expect("write the .def file");
+            println!("cargo:rustc-cdylib-link-arg=-Wl,{}", path.display());
+        }
+        // Mach-O: the exported symbols, each with the leading underscore of C names (for
+        // ld64 or ld64.lld, which fmu/ld64.sh runs: zig's linker has no export list), no
+        // dylib that nothing uses (libc's iconv functions name libiconv).
+        "macos" => {
+            println!("cargo:rustc-cdylib-link-arg=-Wl,-dead_strip_dylibs");
+            // The library's own name, in place of the path it was linked at.
+            println!(
+                "cargo:rustc-cdylib-link-arg=-Wl,-install_name,@rpath/libtensegrity_fmu_binary.dylib"
+            );
+            let list: String = FMI2_FUNCTIONS.iter().map(|f| format!("_{f}\n")).collect();
+            let path = out.join("fmi2-exports.txt");
+            std::fs::write(&path, list).expect("write the exported symbols list");
+            println!(
+                "cargo:rustc-cdylib-link-arg=-Wl,-exported_symbols_list,{}",
+                path.display()
+            );
+        }
         _ => {}
     }
 }

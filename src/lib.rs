@@ -28,7 +28,7 @@ pub mod render;
 pub mod report;
 pub mod scene;
 pub mod sim;
-mod simd;
+pub mod simd;
 
 pub use error::{SceneError, StepError};
 pub use model::Model;

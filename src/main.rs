@@ -13,6 +13,10 @@ fn main() -> ExitCode {
         return ExitCode::FAILURE;
     }
     let args = cli::Cli::parse();
+    if let Err(message) = tensegrity_fmu::simd::forced_scalar() {
+        eprintln!("error: {message}");
+        return ExitCode::FAILURE;
+    }
     match cli::run(args) {
         // Stopped by Ctrl-C with what it had written kept: as a shell reports an interrupt.
         Ok(()) if cli::interrupt::stop_requested() => ExitCode::from(130),

@@ -128,3 +128,19 @@ fn long_scene_lines_are_cut_in_errors() {
         assert!(err.contains('…') && err.contains("(line "), "{name}: {err}");
     }
 }
+
+#[test]
+fn a_bad_tensegrity_simd_value_is_a_one_line_error() {
+    let out = Command::new(env!("CARGO_BIN_EXE_tensegrity-fmu"))
+        .args(["scene", "prism2"])
+        .env("TENSEGRITY_SIMD", "avx512")
+        .output()
+        .expect("the CLI runs");
+    assert!(!out.status.success());
+    assert!(out.stdout.is_empty());
+    assert_eq!(
+        String::from_utf8_lossy(&out.stderr),
+        "error: TENSEGRITY_SIMD=avx512 is not a kernel choice: set it to `scalar` or `auto`, \
+         or unset it\n"
+    );
+}

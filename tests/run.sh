@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
-# The project's one test command: set-up, formatting, lints, Rust tests, FMU build (the
-# portable binary too) and the fmpy suite (fmpy and libcosim). Every cargo step says why
+# The project's one test command: set-up, formatting, lints, Rust tests, FMU build (every
+# platform's binary too) and the fmpy suite (fmpy and libcosim). Every cargo step says why
 # cargo rebuilt something it had built before (its fingerprint's "dirty" reason), so a second
 # run with nothing changed shows at once if anything recompiles.
 set -euo pipefail
@@ -28,7 +28,7 @@ echo "== cargo fmt --check"
 cargo fmt --all -- --check
 cargo_step cargo clippy --release --workspace --all-targets -- -D warnings
 cargo_step cargo build --release --workspace                   # the CLI and the FMU binary
-cargo_step bash fmu/build-binary.sh   # the portable FMU binary (glibc 2.28) that `build` packages
+cargo_step bash fmu/build-binary.sh   # every platform's FMU binary (linux64 for glibc 2.28) that `build` packages
 cargo_step cargo test --release --workspace
 echo "== pytest (fmpy and libcosim against the built FMUs)"
 .venv/bin/python -m pytest -q tests/fmpy

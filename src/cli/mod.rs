@@ -21,6 +21,7 @@ use std::path::PathBuf;
 use clap::{Parser, Subcommand};
 
 use tensegrity_fmu::fmi;
+use tensegrity_fmu::fmi::platforms::Binary;
 use tensegrity_fmu::integrator::Method;
 use tensegrity_fmu::scene::{self, Scene, BUILTIN_DEFAULT};
 
@@ -86,6 +87,10 @@ enum Command {
         /// these sources, else libtensegrity_fmu_binary.so next to this program).
         #[arg(long)]
         binary: Option<PathBuf>,
+        /// Platforms to package, comma-separated from linux64,win64,darwin64,aarch64-linux
+        /// (default: every one that fmu/build-binary.sh built from these sources).
+        #[arg(long)]
+        platforms: Option<String>,
     },
     /// Regenerate the golden modelDescription.xml files of the shipped scenes.
     Golden {
@@ -336,7 +341,15 @@ pub fn run(cli: Cli) -> Result<(), String> {
             scene,
             output,
             binary,
-        } => build(scene.as_deref().unwrap_or(BUILTIN_DEFAULT), output, binary),
+            platforms,
+        } => {
+            let binaries = fmu_binaries(binary, platforms.as_deref())?;
+            build(
+                scene.as_deref().unwrap_or(BUILTIN_DEFAULT),
+                output,
+                &binaries,
+            )
+        }
     }
 }
 
@@ -344,11 +357,10 @@ fn load_scene(scene: Option<String>) -> Result<Scene, String> {
     Scene::from_name_or_file(scene.as_deref().unwrap_or(BUILTIN_DEFAULT)).map_err(|e| e.to_string())
 }
 
-fn build(scene_arg: &str, output: Option<PathBuf>, binary: Option<PathBuf>) -> Result<(), String> {
+fn build(scene_arg: &str, output: Option<PathBuf>, binaries: &[Binary]) -> Result<(), String> {
     let scene = Scene::from_name_or_file(scene_arg).map_err(|e| e.to_string())?;
-    let binary = fmu_binary(binary)?;
     let out = output.unwrap_or_else(|| PathBuf::from(format!("{}.fmu", scene.name)));
-    let built = fmi::package::build_fmu(&scene, &binary, &out)?;
+    let built = fmi::package::build_fmu_for(&scene, binaries, &out)?;
     if let Some(start) = built.start {
         eprintln!("{start}");
     }
@@ -361,12 +373,53 @@ fn build(scene_arg: &str, output: Option<PathBuf>, binary: Option<PathBuf>) -> R
              (an importer may set other solver parameters or inputs first): {why}"
         );
     }
+    let folders: Vec<_> = binaries.iter().map(|b| b.platform.folder).collect();
     eprintln!(
-        "built {} ({} variables, model identifier {}, GUID {})",
-        scene.name, built.variables, built.model_identifier, built.guid
+        "built {} ({} variables, model identifier {}, GUID {}, platforms {})",
+        scene.name,
+        built.variables,
+        built.model_identifier,
+        built.guid,
+        folders.join(",")
     );
     println!("{}", out.display());
     Ok(())
+}
+
+/// The binaries `build` packages: linux64 from `binary` or as [`fmu_binary`] finds it, and
+/// the other platforms' as `fmu/build-binary.sh` left them. Without `platforms`, every
+/// platform built from these sources; a platform named there must have its binary.
+fn fmu_binaries(binary: Option<PathBuf>, platforms: Option<&str>) -> Result<Vec<Binary>, String> {
+    let chosen = match platforms {
+        Some(list) => fmi::platforms::parse(list)?,
+        None => fmi::platforms::PLATFORMS.to_vec(),
+    };
+    if binary.is_some() && !chosen.contains(&fmi::platforms::LINUX64) {
+        return Err(
+            "--binary is the linux64 binary: add linux64 to --platforms or drop --binary".into(),
+        );
+    }
+    let exe = std::env::current_exe().map_err(|e| e.to_string())?;
+    let dir = exe.parent().ok_or("cannot locate this program's folder")?;
+    let mut binaries = Vec::new();
+    for platform in chosen {
+        if platform == fmi::platforms::LINUX64 {
+            let path = fmu_binary(binary.clone())?;
+            binaries.push(Binary { platform, path });
+            continue;
+        }
+        match fmi::platforms::built(dir, &platform) {
+            Ok(b) => binaries.push(b),
+            Err(why) if platforms.is_some() => {
+                return Err(format!(
+                    "--platforms {}: {why}: build it with `bash fmu/build-binary.sh`",
+                    platform.folder
+                ))
+            }
+            Err(_) => {}
+        }
+    }
+    Ok(binaries)
 }
 
 /// `binary`, or the default one; either must exist.
@@ -399,14 +452,13 @@ fn default_binary(dir: &std::path::Path) -> PathBuf {
         return native;
     };
     let portable = target
-        .join("x86_64-unknown-linux-gnu")
+        .join(fmi::platforms::LINUX64.target)
         .join(profile)
         .join(NAME);
     let Ok(so) = std::fs::read(&portable) else {
         return native;
     };
-    let id = fmi::BUILD_ID.as_bytes();
-    if so.windows(id.len()).any(|w| w == id) {
+    if fmi::platforms::from_these_sources(&so) {
         return portable;
     }
     eprintln!(

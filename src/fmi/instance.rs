@@ -74,6 +74,7 @@ impl Instance {
         if name.is_empty() {
             return Err("fmi2Instantiate: instanceName is empty".into());
         }
+        crate::simd::forced_scalar().map_err(|e| format!("fmi2Instantiate: {e}"))?;
         let path = resources.join("scene.toml");
         let text = std::fs::read_to_string(&path).map_err(|e| {
             format!(
@@ -113,6 +114,10 @@ impl Instance {
             logging: [logging_on, true, true],
             messages: Vec::new(),
         };
+        instance.log(
+            Category::Events,
+            format!("kernels: {}", crate::simd::kernels()),
+        );
         for w in instance.core.sim.warnings().to_vec() {
             instance.log(Category::Warning, format!("scene: {w}"));
         }

@@ -12,6 +12,8 @@ pub mod instance;
 #[cfg(feature = "cli")]
 pub mod package;
 mod parameters;
+#[cfg(feature = "cli")]
+pub mod platforms;
 pub mod snapshot;
 mod state;
 pub mod variables;

@@ -1,5 +1,5 @@
-//! Writes a `.fmu` archive: modelDescription.xml, the generic binary under the model
-//! identifier, the scene in `resources/`, the documentation and the icon `model.png`.
+//! Writes a `.fmu` archive: modelDescription.xml, the generic binary of each platform under
+//! the model identifier, the scene in `resources/`, the documentation and the icon `model.png`.
 
 use std::io::Write;
 use std::path::Path;
@@ -10,8 +10,9 @@ use super::description::{
     generation_tool, iso8601_utc, model_description, model_identifier, Provenance,
 };
 use super::documentation::index_html;
+use super::guid_for;
+use super::platforms::{from_these_sources, Binary, LINUX64};
 use super::variables::VariableTable;
-use super::{guid_for, BUILD_ID};
 use crate::partial::Partial;
 use crate::render::{self, picture, Frames};
 use crate::scene::Scene;
@@ -63,8 +64,18 @@ pub fn golden_model_description(scene: &Scene) -> Result<String, String> {
         .map_err(|e| format!("modelDescription.xml: {e}"))
 }
 
-/// Builds the FMU for `scene` at `out`, with the shared library at `binary`.
+/// Builds the FMU for `scene` at `out`, with the linux64 shared library at `binary`.
 pub fn build_fmu(scene: &Scene, binary: &Path, out: &Path) -> Result<Built, String> {
+    let binary = Binary {
+        platform: LINUX64,
+        path: binary.to_path_buf(),
+    };
+    build_fmu_for(scene, &[binary], out)
+}
+
+/// Builds the FMU for `scene` at `out` with these binaries (one per platform; the same
+/// modelDescription.xml for all).
+pub fn build_fmu_for(scene: &Scene, binaries: &[Binary], out: &Path) -> Result<Built, String> {
     let scene_text = scene.to_toml_string();
     let model = crate::analysis::load(scene).map_err(|e| e.to_string())?;
     let mut sim = Simulation::new(model);
@@ -80,15 +91,21 @@ pub fn build_fmu(scene: &Scene, binary: &Path, out: &Path) -> Result<Built, Stri
         .to_xml()
         .map_err(|e| format!("modelDescription.xml: {e}"))?;
     let id = model_identifier(sim.model());
-    let so = std::fs::read(binary)
-        .map_err(|e| format!("cannot read the FMU binary {}: {e}", binary.display()))?;
-    // The binary hashes the same BUILD_ID into the GUID; a stale one could never load.
-    if !so.windows(BUILD_ID.len()).any(|w| w == BUILD_ID.as_bytes()) {
-        return Err(format!(
-            "the FMU binary {} was built from other sources than this program (its GUIDs \
-             would not match); rebuild both with `cargo build --release --workspace`",
-            binary.display()
-        ));
+    let mut libraries = Vec::new();
+    for Binary { platform, path } in binaries {
+        let bytes = std::fs::read(path)
+            .map_err(|e| format!("cannot read the FMU binary {}: {e}", path.display()))?;
+        // The binary hashes the same BUILD_ID into the GUID; a stale one could never load.
+        if !from_these_sources(&bytes) {
+            return Err(format!(
+                "the FMU binary {} was built from other sources than this program (its GUIDs \
+                 would not match); rebuild both with `cargo build --release --workspace` and \
+                 `bash fmu/build-binary.sh`",
+                path.display()
+            ));
+        }
+        let name = format!("binaries/{}/{id}.{}", platform.folder, platform.extension);
+        libraries.push((name, bytes));
     }
     let file_name = out.file_name().map_or_else(
         || format!("{}.fmu", sim.model().scene.name),
@@ -100,14 +117,14 @@ pub fn build_fmu(scene: &Scene, binary: &Path, out: &Path) -> Result<Built, Stri
     let at_start = Frames::record(&mut sim, &[start])?;
     let icon = picture::icon_png(&at_start)?;
     let viewer = render::html::page(&at_start);
-    let entries: [(String, &[u8]); 6] = [
-        ("modelDescription.xml".into(), xml.as_bytes()),
-        (format!("binaries/linux64/{id}.so"), &so),
+    let mut entries: Vec<(String, &[u8])> = vec![("modelDescription.xml".into(), xml.as_bytes())];
+    entries.extend(libraries.iter().map(|(n, b)| (n.clone(), b.as_slice())));
+    entries.extend([
         ("resources/scene.toml".into(), scene_text.as_bytes()),
         ("documentation/index.html".into(), html.as_bytes()),
         (STRUCTURE_PAGE.into(), viewer.as_bytes()),
-        ("model.png".into(), &icon),
-    ];
+        ("model.png".into(), icon.as_slice()),
+    ]);
     write_atomically(out, &entries)?;
     Ok(Built {
         guid,
