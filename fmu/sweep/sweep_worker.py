@@ -52,6 +52,9 @@ class Instance:
         Instance.serial += 1
         self.id = f"{socket.gethostname()}:{os.getpid()}:{Instance.serial}"
         self.used = False  # a used instance is reset (or rewound) before the next sample
+        # Held while a sample runs: a worker closing (Ctrl-C, a lost scheduler) must not
+        # free an instance that its task thread is still stepping.
+        self.busy = threading.Lock()
 
     def _callbacks(self):
         # The FMU explains every error through the logger only; keep those lines for `status`.
@@ -121,7 +124,10 @@ class FmuPlugin(WorkerPlugin):
 
     def teardown(self, worker):
         for inst in self.instances:
-            inst.free()
+            # One still running is left to the process's exit: freeing it under its
+            # thread's feet corrupted the heap.
+            if inst.busy.acquire(blocking=False):
+                inst.free()
         shutil.rmtree(self.root, ignore_errors=True)
 
 
@@ -179,6 +185,11 @@ def run_sample(key, values, outputs, stop_time, step, warm=None):
     """
     plugin = get_worker().plugins[PLUGIN]
     inst = plugin.instance(key)
+    with inst.busy:
+        return _run(plugin, key, inst, values, outputs, stop_time, step, warm)
+
+
+def _run(plugin, key, inst, values, outputs, stop_time, step, warm):
     inst.errors.clear()
     extremes = {}
     try:
