@@ -79,13 +79,7 @@ impl Partial {
         let cannot = |e: std::io::Error| format!("cannot create {}: {e}", target.display());
         loop {
             let mut live = live();
-            let file = Builder::new()
-                .prefix(&prefix)
-                .rand_bytes(6)
-                .suffix(leftovers::SUFFIX)
-                .permissions(Permissions::from_mode(mode))
-                .tempfile_in(&dir)
-                .map_err(cannot)?;
+            let file = named(&prefix, mode).tempfile_in(&dir).map_err(cannot)?;
             let (file, tmp) = file.into_parts();
             if !lock_and_still_there(&file, &tmp).map_err(cannot)? {
                 continue; // another run took it for a leftover: make another
@@ -142,13 +136,7 @@ impl PartialDir {
         let cannot = |e: std::io::Error| format!("cannot create {}: {e}", target.display());
         loop {
             let mut live = live();
-            let tmp = Builder::new()
-                .prefix(&prefix)
-                .rand_bytes(6)
-                .suffix(leftovers::SUFFIX)
-                .permissions(Permissions::from_mode(0o777))
-                .tempdir_in(&dir)
-                .map_err(cannot)?;
+            let tmp = named(&prefix, 0o777).tempdir_in(&dir).map_err(cannot)?;
             let lock = match File::open(tmp.path()) {
                 Ok(lock) => lock,
                 // Another run took it for a leftover between creation and opening.
@@ -222,6 +210,18 @@ pub fn commit_folder_and_file(mut dir: PartialDir, mut file: Partial) -> Result<
     }
     drop(live);
     Ok(())
+}
+
+/// A temporary's name, `PREFIX` + six random letters or digits + the suffix that marks it
+/// as this program's, and its permission bits.
+fn named(prefix: &std::ffi::OsStr, mode: u32) -> Builder<'_, 'static> {
+    let mut builder = Builder::new();
+    builder
+        .prefix(prefix)
+        .rand_bytes(6)
+        .suffix(leftovers::SUFFIX)
+        .permissions(Permissions::from_mode(mode));
+    builder
 }
 
 /// The folder of `target` and the prefix of its temporaries, after removing the leftovers

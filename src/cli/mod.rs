@@ -446,15 +446,11 @@ fn fmu_binary(binary: Option<PathBuf>) -> Result<PathBuf, String> {
 /// 2.28) puts a portable one in target/x86_64-unknown-linux-gnu/<profile>/, preferred
 /// whenever it was built from this program's sources (cargo may rebuild either one later).
 fn default_binary(dir: &std::path::Path) -> PathBuf {
-    const NAME: &str = "libtensegrity_fmu_binary.so";
-    let native = dir.join(NAME);
-    let (Some(target), Some(profile)) = (dir.parent(), dir.file_name()) else {
+    let linux64 = &fmi::platforms::LINUX64;
+    let native = dir.join(linux64.file);
+    let Some(portable) = fmi::platforms::built_path(dir, linux64) else {
         return native;
     };
-    let portable = target
-        .join(fmi::platforms::LINUX64.target)
-        .join(profile)
-        .join(NAME);
     let Ok(so) = std::fs::read(&portable) else {
         return native;
     };
