@@ -11,6 +11,7 @@
 #![warn(missing_docs)]
 
 pub mod analysis;
+pub mod contact;
 pub mod correction;
 pub mod dynamics;
 pub mod error;

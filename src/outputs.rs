@@ -36,6 +36,10 @@ pub enum Quantity {
     GroundForce(usize),
     /// Support reaction (support, axis), N.
     SupportReaction(usize, usize),
+    /// Total force of terrain shape k on the structure (shape, axis), N.
+    TerrainForce(usize, usize),
+    /// Contact points pushing on terrain shape k.
+    TerrainContacts(usize),
 }
 
 /// One named output.
@@ -63,7 +67,10 @@ impl Quantity {
             Self::BarForce(_) => OutputGroup::BarForces,
             Self::LengthError | Self::OrthogonalityError => OutputGroup::Diagnostics,
             Self::Energy => OutputGroup::Energy,
-            Self::ContactForce(_) | Self::GroundForce(_) => OutputGroup::Contact,
+            Self::ContactForce(_)
+            | Self::GroundForce(_)
+            | Self::TerrainForce(..)
+            | Self::TerrainContacts(_) => OutputGroup::Contact,
             Self::SupportReaction(..) => OutputGroup::Reactions,
         }
     }
@@ -91,6 +98,8 @@ impl Quantity {
             Self::ContactForce(k) => sim.contact_force(k),
             Self::GroundForce(axis) => sim.ground_force()[axis],
             Self::SupportReaction(k, axis) => sim.support_reaction(k)[axis],
+            Self::TerrainForce(k, axis) => sim.shape_load(k).force[axis],
+            Self::TerrainContacts(k) => f64::from(sim.shape_load(k).contacts),
         }
     }
 }
@@ -240,6 +249,28 @@ fn all_outputs(sim: &Simulation) -> Vec<Output> {
             });
         }
     }
+    for (k, t) in model.scene.terrain.iter().enumerate() {
+        let shape = format!("terrain[{}]", k + 1);
+        for (axis, name) in AXES.iter().enumerate() {
+            out.push(Output {
+                name: format!("{shape}.force_{name}"),
+                unit: "N",
+                description: format!(
+                    "total force of {shape} ({}) on the structure along {name} (normal and friction)",
+                    t.kind.name()
+                ),
+                quantity: Quantity::TerrainForce(k, axis),
+            });
+        }
+        out.push(Output {
+            name: format!("{shape}.contacts"),
+            unit: "1",
+            description: format!(
+                "number of contact points pushing on {shape} (bar ends and sides)"
+            ),
+            quantity: Quantity::TerrainContacts(k),
+        });
+    }
     out
 }
 
@@ -251,6 +282,9 @@ fn energy_terms(model: &crate::model::Model) -> String {
     }
     if model.ground.is_some() {
         terms.push("ground penalty");
+    }
+    if model.terrain.is_some() {
+        terms.push("terrain penalty");
     }
     format!("{} energy", terms.join(" + "))
 }

@@ -369,10 +369,12 @@ fn support_reactions_balance_the_structure() {
             BarSpec {
                 nodes: [1, 2],
                 mass: 1.0,
+                radius: 0.0,
             },
             BarSpec {
                 nodes: [4, 5],
                 mass: 2.0,
+                radius: 0.0,
             },
         ],
         cables: vec![

@@ -21,6 +21,7 @@ fn sliding_bar(friction: f64, velocity: [f64; 3]) -> Scene {
     scene.bars = vec![BarSpec {
         nodes: [1, 2],
         mass: 1.0,
+        radius: 0.0,
     }];
     scene.cables.clear();
     scene.fixed.clear();

@@ -152,6 +152,7 @@ fn dropped_bar(h: f64, drop: f64) -> Scene {
     scene.bars = vec![BarSpec {
         nodes: [1, 2],
         mass: 1.0,
+        radius: 0.0,
     }];
     scene.cables = Vec::new();
     scene.force_inputs = Vec::new();

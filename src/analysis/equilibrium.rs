@@ -150,7 +150,8 @@ fn cannot_carry(model: &Model, ws: &Workspace, unbalanced: f64) -> SceneError {
         ground
             .nodes
             .iter()
-            .map(|&(n, _)| -ground.penetration(&ws.node_pos[n]))
+            .zip(&ground.radii)
+            .map(|(&(n, _), &r)| -ground.penetration(&ws.node_pos[n], r))
             .min_by(f64::total_cmp)
     });
     match lowest {

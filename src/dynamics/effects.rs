@@ -4,6 +4,7 @@
 
 use nalgebra::Vector3;
 
+use super::terrain::{ShapeLoad, TerrainSink};
 use super::{Inputs, Workspace};
 pub use crate::model::effects::{CableLink, ConstraintEffect, ForceEffect, Pipeline, Target};
 use crate::model::Model;
@@ -16,6 +17,7 @@ pub fn applied_forces(model: &Model, inputs: &Inputs, t: f64, ws: &mut Workspace
         end_force: &mut ws.end_force,
         gamma: &mut ws.gamma,
         contact_force: &mut ws.contact_force,
+        shape_load: &mut ws.shape_load,
     };
     let nodes = (ws.node_pos.as_slice(), ws.node_vel.as_slice());
     apply(&model.pipeline.forces, inputs, t, nodes, &mut sink);
@@ -30,6 +32,8 @@ pub(super) trait ForceSink {
     fn gamma(&mut self, cable: usize, gamma: f64);
     /// Records the force of contact point `k`.
     fn contact(&mut self, k: usize, f: Vector3<f64>);
+    /// The terrain shapes' loads, to fill.
+    fn shape_loads(&mut self) -> &mut [ShapeLoad];
 }
 
 /// The whole of each output.
@@ -37,6 +41,7 @@ pub(super) struct Slices<'a> {
     pub end_force: &'a mut [Vector3<f64>],
     pub gamma: &'a mut [f64],
     pub contact_force: &'a mut [Vector3<f64>],
+    pub shape_load: &'a mut [ShapeLoad],
 }
 
 impl ForceSink for Slices<'_> {
@@ -51,6 +56,25 @@ impl ForceSink for Slices<'_> {
     #[inline(always)]
     fn contact(&mut self, k: usize, f: Vector3<f64>) {
         self.contact_force[k] = f;
+    }
+    fn shape_loads(&mut self) -> &mut [ShapeLoad] {
+        self.shape_load
+    }
+}
+
+/// Terrain forces into a [`ForceSink`] (which keeps the shapes' loads).
+struct IntoSink<'s, S>(&'s mut S);
+
+impl<S: ForceSink> TerrainSink for IntoSink<'_, S> {
+    #[inline(always)]
+    fn add(&mut self, end: usize, f: Vector3<f64>) {
+        self.0.add(end, f);
+    }
+    #[inline(always)]
+    fn shape(&mut self, shape: usize, f: Vector3<f64>) {
+        let load = &mut self.0.shape_loads()[shape];
+        load.force += f;
+        load.contacts += 1;
     }
 }
 
@@ -107,11 +131,15 @@ pub(super) fn apply(
                 }
             }
             ForceEffect::GroundContact(ground) => {
-                for (k, &(n, e)) in ground.nodes.iter().enumerate() {
-                    let f = ground.force(&nodes.0[n], &nodes.1[n]);
+                for (k, (&(n, e), &r)) in ground.nodes.iter().zip(&ground.radii).enumerate() {
+                    let f = ground.force(&nodes.0[n], &nodes.1[n], r);
                     sink.contact(k, f);
                     sink.add(e, f);
                 }
+            }
+            ForceEffect::Terrain(terrain) => {
+                sink.shape_loads().fill(ShapeLoad::default());
+                super::terrain::apply(terrain, nodes, &mut IntoSink(sink));
             }
         }
     }
@@ -283,6 +311,7 @@ mod tests {
             end_force: &mut end_force,
             gamma: &mut gamma,
             contact_force: &mut [],
+            shape_load: &mut [],
         };
         elastic_cables(&cables, &x, &mut sink);
 

@@ -54,9 +54,12 @@ pub fn potential(model: &Model, inputs: &Inputs, ws: &Workspace) -> f64 {
         }
     }
     if let Some(ground) = &model.ground {
-        for &(n, _) in &ground.nodes {
-            v += ground.energy(&ws.node_pos[n]);
+        for (&(n, _), &r) in ground.nodes.iter().zip(&ground.radii) {
+            v += ground.energy(&ws.node_pos[n], r);
         }
+    }
+    if let Some(terrain) = &model.terrain {
+        v += super::terrain::energy(terrain, &ws.node_pos);
     }
     v
 }

@@ -12,6 +12,7 @@ pub mod energy;
 pub mod parallel;
 pub mod supports;
 pub mod tangent;
+pub mod terrain;
 
 use std::sync::Arc;
 
@@ -89,6 +90,8 @@ pub struct Workspace {
     pub lambda: Vec<f64>,
     /// Ground contact force per contact point (`Ground::nodes` order), N.
     pub contact_force: Vec<Vector3<f64>>,
+    /// Each terrain shape's total force and contact count.
+    pub shape_load: Vec<terrain::ShapeLoad>,
     /// Per bar, what the second λ pass needs, and `b` and `1/|b|²` for K's assembly after
     /// the first (K's bundles, deferred blocks, again after a failed factor).
     bars: Vec<BarKept>,
@@ -160,6 +163,10 @@ impl Workspace {
             contact_force: vec![
                 Vector3::zeros();
                 model.ground.as_ref().map_or(0, |g| g.nodes.len())
+            ],
+            shape_load: vec![
+                terrain::ShapeLoad::default();
+                model.terrain.as_ref().map_or(0, |t| t.shapes.len())
             ],
             bars: vec![(Vector3::zeros(), 0.0, 1.0, 1.0); model.bars.len()],
             reactions: model.reactions.clone(),

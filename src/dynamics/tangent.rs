@@ -277,10 +277,28 @@ impl EndDerivatives {
                 }
             }
             ForceEffect::GroundContact(ground) => {
-                for &(n, e) in &ground.nodes {
-                    let (dx, dv) = contact_derivatives(ground, &ws.node_pos[n], &ws.node_vel[n]);
+                for (&(n, e), &r) in ground.nodes.iter().zip(&ground.radii) {
+                    let (x, v) = (&ws.node_pos[n], &ws.node_vel[n]);
+                    let (dx, dv) = contact_derivatives(ground, x, v, r);
                     add_block(&mut self.position, e, e, &dx);
                     add_block(&mut self.velocity, e, e, &dv);
+                }
+            }
+            ForceEffect::Terrain(terrain) => {
+                for cap in &terrain.capsules {
+                    let [a, b] = cap.nodes;
+                    let x = [ws.node_pos[a], ws.node_pos[b]];
+                    let v = [ws.node_vel[a], ws.node_vel[b]];
+                    let d = super::terrain::capsule_derivatives(terrain, x, v, cap.radius);
+                    for (m, blocks) in [(&mut self.position, &d[0]), (&mut self.velocity, &d[1])] {
+                        for (row, row_blocks) in cap.ends.iter().zip(blocks) {
+                            for (col, block) in cap.ends.iter().zip(row_blocks) {
+                                if let (Some(r), Some(c)) = (row, col) {
+                                    add_block(m, *r, *c, block);
+                                }
+                            }
+                        }
+                    }
                 }
             }
             ForceEffect::Gravity(_)
@@ -353,10 +371,11 @@ fn contact_derivatives(
     ground: &crate::model::contact::Ground,
     x: &Vector3<f64>,
     v: &Vector3<f64>,
+    r: f64,
 ) -> (Matrix3<f64>, Matrix3<f64>) {
     let zero = (Matrix3::zeros(), Matrix3::zeros());
     let n = ground.normal;
-    let d = ground.penetration(x);
+    let d = ground.penetration(x, r);
     if d < -TOUCHING {
         return zero;
     }

@@ -21,7 +21,7 @@
 
 use fmi2_model_description::{Causality, DependencyKind, Unknown};
 
-use super::variables::{Binding, GroundField, VariableTable};
+use super::variables::{Binding, GroundField, TerrainField, VariableTable};
 use crate::model::coords::End;
 use crate::model::Model;
 use crate::outputs::Quantity;
@@ -41,6 +41,10 @@ struct Footprint {
     contact_normal: bool,
     /// It enters the total ground force (normal and friction).
     contact_total: bool,
+    /// It enters the terrain shapes' forces.
+    terrain_force: bool,
+    /// It enters which points touch the terrain.
+    terrain_touch: bool,
 }
 
 /// A row of `<InitialUnknowns>` that reads every input and more than this many parameters
@@ -95,6 +99,8 @@ struct Readers {
     energy: Reads,
     contact_normal: Reads,
     contact_total: Reads,
+    terrain_force: Reads,
+    terrain_touch: Reads,
 }
 
 /// `<Outputs>` and `<InitialUnknowns>` with their dependencies (1-based table indices), in
@@ -152,6 +158,8 @@ pub fn model_structure(model: &Model, table: &VariableTable) -> (Vec<Unknown>, V
             Quantity::Energy => &readers.energy,
             Quantity::ContactForce(_) => &readers.contact_normal,
             Quantity::GroundForce(_) => &readers.contact_total,
+            Quantity::TerrainForce(..) => &readers.terrain_force,
+            Quantity::TerrainContacts(_) => &readers.terrain_touch,
         };
         outputs.push(outputs_row(i, reads, n_inputs));
         initial.push(initial_row(i, reads, n_inputs, n_parameters));
@@ -255,6 +263,8 @@ fn readers(model: &Model, table: &VariableTable, groups: &[usize]) -> Readers {
             (f.energy, &mut r.energy),
             (f.contact_normal, &mut r.contact_normal),
             (f.contact_total, &mut r.contact_total),
+            (f.terrain_force, &mut r.terrain_force),
+            (f.terrain_touch, &mut r.terrain_touch),
         ] {
             if flag {
                 reads.push(index, c);
@@ -353,6 +363,33 @@ fn footprint(model: &Model, binding: Binding) -> Footprint {
                 GroundField::Height | GroundField::Stiffness | GroundField::Damping
             ),
             contact_total: true,
+            ..Footprint::default()
+        },
+        Binding::Radius(i) => {
+            let grounded = model.ground.is_some();
+            Footprint {
+                ends: model.bars[i]
+                    .nodes
+                    .iter()
+                    .filter_map(|&n| node_end[n])
+                    .collect(),
+                energy: true,
+                contact_normal: grounded,
+                contact_total: grounded,
+                terrain_force: model.terrain.is_some(),
+                terrain_touch: model.terrain.is_some(),
+                ..Footprint::default()
+            }
+        }
+        Binding::Terrain(_, field) => Footprint {
+            ends: model.terrain.as_ref().map_or(Vec::new(), |t| {
+                t.capsules
+                    .iter()
+                    .flat_map(|c| c.ends.into_iter().flatten())
+                    .collect()
+            }),
+            energy: field == TerrainField::Stiffness,
+            terrain_force: true,
             ..Footprint::default()
         },
         Binding::Output(_)

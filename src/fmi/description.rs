@@ -71,9 +71,12 @@ fn bounds(v: &Variable) -> (Option<f64>, Option<f64>) {
         Binding::Method => (Some(1.0), Some(Method::ALL.len() as f64)),
         Binding::MaxSteps => (Some(1.0), Some(f64::from(i32::MAX))),
         Binding::Ground(GroundField::Height) => (None, None),
-        Binding::Mass(_) | Binding::StepSize | Binding::PointMass(_) | Binding::Ground(_) => {
-            (Some(0.0), None)
-        }
+        Binding::Mass(_)
+        | Binding::StepSize
+        | Binding::PointMass(_)
+        | Binding::Ground(_)
+        | Binding::Radius(_)
+        | Binding::Terrain(..) => (Some(0.0), None),
         _ => (None, None),
     }
 }

@@ -2,10 +2,10 @@
 //! parameter binding, so get, set and FMU-state restore share one mapping, and one check
 //! of a parameter's value.
 
-use super::variables::{BaseType, Binding, GroundField, LoadField, Variable};
+use super::variables::{BaseType, Binding, GroundField, LoadField, TerrainField, Variable};
 use crate::integrator::Method;
 use crate::numbers::shortest;
-use crate::scene::{GroundSpec, LoadSpec, Scene};
+use crate::scene::{GroundSpec, LoadSpec, Scene, TerrainSpec};
 
 /// The scene value behind a parameter binding (0 for a non-parameter binding).
 pub(super) fn read_parameter(scene: &Scene, binding: Binding) -> f64 {
@@ -32,6 +32,8 @@ pub(super) fn read_parameter(scene: &Scene, binding: Binding) -> f64 {
         Binding::Load(k, field) => {
             load_field(&mut scene.loads[k].clone(), field).map_or(0.0, |v| *v)
         }
+        Binding::Radius(i) => scene.bars[i].radius,
+        Binding::Terrain(k, field) => *terrain_field(&mut scene.terrain[k].clone(), field),
         Binding::Output(_)
         | Binding::ForceDensity(_)
         | Binding::NodeForce(..)
@@ -102,6 +104,8 @@ pub(super) fn apply_parameter(scene: &mut Scene, binding: Binding, value: f64) {
                 *v = value;
             }
         }
+        Binding::Radius(i) => scene.bars[i].radius = value,
+        Binding::Terrain(k, field) => *terrain_field(&mut scene.terrain[k], field) = value,
         Binding::Output(_)
         | Binding::ForceDensity(_)
         | Binding::NodeForce(..)
@@ -135,5 +139,15 @@ fn ground_field(g: &mut GroundSpec, field: GroundField) -> &mut f64 {
         GroundField::Damping => &mut g.damping,
         GroundField::Friction => &mut g.friction,
         GroundField::SlipVelocity => &mut g.slip_velocity,
+    }
+}
+
+/// The scene value behind a terrain parameter.
+fn terrain_field(t: &mut TerrainSpec, field: TerrainField) -> &mut f64 {
+    match field {
+        TerrainField::Stiffness => &mut t.stiffness,
+        TerrainField::Damping => &mut t.damping,
+        TerrainField::Friction => &mut t.friction,
+        TerrainField::SlipVelocity => &mut t.slip_velocity,
     }
 }

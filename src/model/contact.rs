@@ -7,6 +7,7 @@
 
 use nalgebra::Vector3;
 
+use crate::contact::Penalty;
 use crate::scene::GroundSpec;
 
 /// The ground as the step sees it.
@@ -26,11 +27,13 @@ pub struct Ground {
     pub slip_velocity: f64,
     /// Contact points: (node, the bar end that carries it), free nodes on bars only.
     pub nodes: Vec<(usize, usize)>,
+    /// Radius of each contact point's sphere (the widest bar at the node), m.
+    pub radii: Vec<f64>,
 }
 
 impl Ground {
     /// The ground of a validated spec, at the given free bar-end nodes.
-    pub fn new(spec: &GroundSpec, nodes: Vec<(usize, usize)>) -> Self {
+    pub fn new(spec: &GroundSpec, nodes: Vec<(usize, usize)>, radii: Vec<f64>) -> Self {
         let n = Vector3::from(spec.normal);
         Self {
             normal: n / n.norm(),
@@ -40,32 +43,39 @@ impl Ground {
             friction: spec.friction,
             slip_velocity: spec.slip_velocity,
             nodes,
+            radii,
         }
     }
 
-    /// Penetration depth of a point, m (positive inside the ground).
+    /// Penetration depth of a sphere of radius `r` at `x`, m (positive inside the ground).
     #[inline]
-    pub fn penetration(&self, x: &Vector3<f64>) -> f64 {
-        self.height - self.normal.dot(x)
+    pub fn penetration(&self, x: &Vector3<f64>, r: f64) -> f64 {
+        self.height + r - self.normal.dot(x)
     }
 
-    /// Contact force on a node at `x` moving with `v`, N.
+    /// The contact law of every point.
+    pub fn penalty(&self) -> Penalty {
+        Penalty {
+            stiffness: self.stiffness,
+            damping: self.damping,
+            friction: self.friction,
+            slip_velocity: self.slip_velocity,
+        }
+    }
+
+    /// Contact force on a sphere of radius `r` at `x` moving with `v`, N.
     #[inline]
-    pub fn force(&self, x: &Vector3<f64>, v: &Vector3<f64>) -> Vector3<f64> {
-        let d = self.penetration(x);
+    pub fn force(&self, x: &Vector3<f64>, v: &Vector3<f64>, r: f64) -> Vector3<f64> {
+        let d = self.penetration(x, r);
         if d <= 0.0 {
             return Vector3::zeros();
         }
-        let vn = self.normal.dot(v);
-        let fn_ = (self.stiffness * d - self.damping * vn).max(0.0);
-        let vt = v - self.normal * vn;
-        let friction = self.friction * fn_ / vt.norm().max(self.slip_velocity);
-        self.normal * fn_ - vt * friction
+        self.penalty().force(d, &self.normal, v)
     }
 
-    /// Stored penalty energy `½ k d²` of a point, J.
-    pub fn energy(&self, x: &Vector3<f64>) -> f64 {
-        let d = self.penetration(x).max(0.0);
+    /// Stored penalty energy `½ k d²` of a sphere of radius `r` at `x`, J.
+    pub fn energy(&self, x: &Vector3<f64>, r: f64) -> f64 {
+        let d = self.penetration(x, r).max(0.0);
         0.5 * self.stiffness * d * d
     }
 }

@@ -5,6 +5,7 @@
 use nalgebra::Vector3;
 
 use super::contact::Ground;
+use super::terrain::Terrain;
 use super::{CableLaw, Model};
 use crate::scene::LoadSpec;
 
@@ -41,6 +42,8 @@ pub enum ForceEffect {
     ScriptedLoads(Vec<(Target, LoadSpec)>),
     /// Penalty contact with a ground plane at the nodes in `ground.nodes`.
     GroundContact(Ground),
+    /// Bars' capsules against terrain shapes, along their length.
+    Terrain(Box<Terrain>),
 }
 
 /// A constraint contribution beyond the bars' own length constraints.
@@ -141,6 +144,9 @@ impl Pipeline {
         }
         if let Some(ground) = &model.ground {
             push(ForceEffect::GroundContact(ground.clone()), true);
+        }
+        if let Some(terrain) = &model.terrain {
+            push(ForceEffect::Terrain(Box::new(terrain.clone())), true);
         }
         let constraints = if model.reactions.size() > 0 {
             vec![ConstraintEffect::JointsAndPins]

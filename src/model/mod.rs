@@ -9,6 +9,7 @@ pub mod inertia;
 pub mod prestress;
 pub mod reactions;
 pub mod supports;
+pub mod terrain;
 
 use nalgebra::Vector3;
 
@@ -22,6 +23,7 @@ use effects::Pipeline;
 use inertia::{BarInertia, InertiaLanes};
 use reactions::Reactions;
 use supports::Support;
+use terrain::{Capsule, Terrain};
 
 /// A rigid bar between physical nodes (0-based).
 #[derive(Debug, Clone, PartialEq)]
@@ -32,6 +34,8 @@ pub struct Bar {
     pub mass: f64,
     /// Length in m (from the start geometry).
     pub length: f64,
+    /// Radius of its capsule in m (0: a line).
+    pub radius: f64,
 }
 
 /// How a cable's force density γ (N/m) arises.
@@ -98,6 +102,8 @@ pub struct Model {
     pub inertia_lanes: Vec<InertiaLanes>,
     /// The ground plane, if the scene has one.
     pub ground: Option<Ground>,
+    /// Terrain shapes and the bars' capsules, if the scene has terrain.
+    pub terrain: Option<Terrain>,
     /// How to read the support reaction of each pinned node.
     pub supports: Vec<Support>,
     /// The force contributions of the declared effects, run by every evaluation.
@@ -170,6 +176,7 @@ impl Model {
                     nodes,
                     mass: b.mass,
                     length: (positions[nodes[1]] - positions[nodes[0]]).norm(),
+                    radius: b.radius,
                 }
             })
             .collect();
@@ -203,12 +210,34 @@ impl Model {
             .enumerate()
             .map(|(i, b)| BarInertia::new(b.mass, [payload[2 * i], payload[2 * i + 1]]))
             .collect();
+        // A node touches the ground as a sphere as wide as the widest bar it ends.
+        let mut node_radius = vec![0.0f64; positions.len()];
+        for b in &bars {
+            for n in b.nodes {
+                node_radius[n] = node_radius[n].max(b.radius);
+            }
+        }
         let ground = scene.ground.as_ref().map(|spec| {
-            let contacts = (0..positions.len())
+            let contacts: Vec<(usize, usize)> = (0..positions.len())
                 .filter(|&n| !pinned[n])
                 .filter_map(|n| coords.node_end[n].map(|e| (n, e)))
                 .collect();
-            Ground::new(spec, contacts)
+            let radii = contacts.iter().map(|&(n, _)| node_radius[n]).collect();
+            Ground::new(spec, contacts, radii)
+        });
+        let terrain = (!scene.terrain.is_empty()).then(|| {
+            let capsules = bars
+                .iter()
+                .enumerate()
+                .filter(|&(i, _)| !coords.static_bar[i])
+                .map(|(i, b)| Capsule {
+                    bar: i,
+                    nodes: b.nodes,
+                    ends: b.nodes.map(|n| coords.node_end[n]),
+                    radius: b.radius,
+                })
+                .collect();
+            Terrain::new(&scene.terrain, capsules)
         });
         let mut reactions = Reactions::new(&coords, &inertia, basis == BasisKind::Dense);
         let units: Vec<Vector3<f64>> = bars
@@ -240,6 +269,7 @@ impl Model {
             inertia_lanes: InertiaLanes::groups(&inertia, &coords.static_bar),
             inertia,
             ground,
+            terrain,
             supports,
             pipeline: Pipeline::default(),
             force_inputs: scene.force_inputs.iter().map(|&n| n - 1).collect(),

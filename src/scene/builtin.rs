@@ -82,6 +82,7 @@ pub fn tower_scene(stages: usize, stiffness: Option<f64>, name: &str) -> Scene {
         .map(|(k, i)| BarSpec {
             nodes: [id(k, i), id(k + 1, i)],
             mass: 1.0,
+            radius: 0.0,
         })
         .collect();
     let cable = |a: usize, b: usize| CableSpec {
@@ -123,6 +124,7 @@ pub fn tower_scene(stages: usize, stiffness: Option<f64>, name: &str) -> Scene {
         loads: Vec::new(),
         point_masses: Vec::new(),
         ground: None,
+        terrain: Vec::new(),
         outputs: None,
         prestress: Some(PrestressSpec {
             min_tension: PRESTRESS_TENSION,
@@ -156,6 +158,7 @@ fn icosahedron() -> Scene {
         .map(|k| BarSpec {
             nodes: [2 * k + 1, 2 * k + 2],
             mass: 1.0,
+            radius: 0.0,
         })
         .collect();
     let cable_length = 6f64.sqrt() / 4.0 * l;
@@ -200,6 +203,7 @@ fn icosahedron() -> Scene {
         loads: Vec::new(),
         point_masses: Vec::new(),
         ground: None,
+        terrain: Vec::new(),
         outputs: None,
         prestress: Some(PrestressSpec {
             min_tension: PRESTRESS_TENSION,

@@ -7,6 +7,7 @@ mod builtin;
 mod extreme;
 pub mod limits;
 mod read;
+mod terrain;
 mod validate;
 
 pub use builtin::{
@@ -14,6 +15,7 @@ pub use builtin::{
     BUILTIN_DEFAULT,
 };
 pub use extreme::{extreme_scenes, Extreme};
+pub use terrain::{TerrainKind, TerrainSpec, MAX_HEIGHTS};
 
 use serde::{Deserialize, Serialize};
 use std::path::Path;
@@ -61,6 +63,9 @@ pub struct Scene {
     /// A ground plane the bar ends touch; absent means none.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub ground: Option<GroundSpec>,
+    /// Planes, boxes and heightfields the bars touch along their length.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub terrain: Vec<TerrainSpec>,
     /// Equilibrium prestress: derive rest lengths / start force densities from a self-stress.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub prestress: Option<PrestressSpec>,
@@ -98,6 +103,14 @@ pub struct BarSpec {
     pub nodes: [usize; 2],
     /// Mass in kg (thin uniform bar).
     pub mass: f64,
+    /// Radius in m: the bar is a capsule that touches terrain (and other bars) along its
+    /// length; 0 (default) is a line.
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub radius: f64,
+}
+
+fn is_zero(v: &f64) -> bool {
+    *v == 0.0
 }
 
 /// A payload rigidly attached to a node.

@@ -48,11 +48,16 @@ impl Scene {
         let is_json = path
             .extension()
             .is_some_and(|e| e.eq_ignore_ascii_case("json"));
-        if is_json {
+        let mut scene = if is_json {
             Self::from_json_str(&text)
         } else {
             Self::from_toml_str(&text)
+        }?;
+        let dir = path.parent().unwrap_or(Path::new("."));
+        for (i, t) in scene.terrain.iter_mut().enumerate() {
+            t.read_file(&format!("terrain[{}]", i + 1), dir)?;
         }
+        Ok(scene)
     }
 }
 

@@ -58,6 +58,13 @@ pub(super) fn validate(scene: &Scene) -> Result<(), SceneError> {
             ));
         }
         finite(&format!("{key}.mass"), bar.mass)?;
+        finite(&format!("{key}.radius"), bar.radius)?;
+        if bar.radius < 0.0 {
+            return Err(SceneError::invalid(
+                format!("{key}.radius"),
+                format!("must be ≥ 0, got {}", bar.radius),
+            ));
+        }
         if bar.mass <= 0.0 {
             return Err(SceneError::invalid(
                 format!("{key}.mass"),
@@ -187,6 +194,9 @@ pub(super) fn validate(scene: &Scene) -> Result<(), SceneError> {
     }
     if let Some(ground) = &scene.ground {
         validate_ground(ground)?;
+    }
+    for (i, t) in scene.terrain.iter().enumerate() {
+        t.validate(&format!("terrain[{}]", i + 1))?;
     }
     super::limits::check(scene)?;
     if let Some(vs) = &scene.velocities {
@@ -351,7 +361,7 @@ fn size_of(scene: &Scene) -> f64 {
     }
 }
 
-fn finite(key: &str, v: f64) -> Result<(), SceneError> {
+pub(super) fn finite(key: &str, v: f64) -> Result<(), SceneError> {
     if !v.is_finite() {
         return Err(SceneError::invalid(
             key,
@@ -361,7 +371,7 @@ fn finite(key: &str, v: f64) -> Result<(), SceneError> {
     within_magnitude(key, v)
 }
 
-fn finite_vec(key: &str, v: &[f64; 3]) -> Result<(), SceneError> {
+pub(super) fn finite_vec(key: &str, v: &[f64; 3]) -> Result<(), SceneError> {
     if !v.iter().all(|x| x.is_finite()) {
         return Err(SceneError::invalid(
             key,

@@ -127,8 +127,9 @@ pub fn attribute(model: &Model, inputs: &Inputs, x: &[Vector3<f64>], dx: &[Vecto
     let ground: f64 = model.ground.as_ref().map_or(0.0, |g| {
         g.nodes
             .iter()
-            .filter(|&&(n, _)| g.penetration(&x[n]) > 0.0)
-            .map(|&(n, _)| g.stiffness * g.normal.dot(&dx[n]).powi(2))
+            .zip(&g.radii)
+            .filter(|&(&(n, _), &r)| g.penetration(&x[n], r) > 0.0)
+            .map(|(&(n, _), _)| g.stiffness * g.normal.dot(&dx[n]).powi(2))
             .sum()
     });
     let total = cables.iter().sum::<f64>() + ground;

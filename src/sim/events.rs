@@ -13,6 +13,7 @@
 
 use nalgebra::Vector3;
 
+use crate::contact::{interior_excess, Shape};
 use crate::dynamics::{Inputs, Workspace};
 use crate::model::effects::{CableLink, ForceEffect};
 use crate::model::Model;
@@ -60,6 +61,20 @@ enum Switch {
         normal: Vector3<f64>,
         height: f64,
     },
+    /// `φ(x) − r` of a capsule's end against terrain shape `shape`: negative in contact.
+    TerrainEnd {
+        at: Point,
+        shape: usize,
+        radius: f64,
+    },
+    /// Minus the largest excess depth of a capsule's side against a shape: negative once
+    /// the side touches between the ends.
+    TerrainSide {
+        a: Point,
+        b: Point,
+        shape: usize,
+        radius: f64,
+    },
 }
 
 /// The switching functions of a model and the buffers to locate their crossings, sized
@@ -69,6 +84,8 @@ enum Switch {
 #[derive(Debug, Clone)]
 pub struct Events {
     switches: Vec<Switch>,
+    /// The terrain shapes the terrain switches name.
+    shapes: Vec<Shape>,
     /// The state at the start of the current (part of a) step.
     pub y0: Vec<f64>,
     /// Signs (`> 0`) of the switching functions at `y0` and at the end of the last step.
@@ -126,6 +143,32 @@ impl Events {
                         });
                     }
                 }
+                ForceEffect::Terrain(terrain) => {
+                    for cap in &terrain.capsules {
+                        let at = |i: usize| match cap.ends[i] {
+                            Some(e) => Point::End(e),
+                            None => Point::Fixed(model.positions[cap.nodes[i]]),
+                        };
+                        for (shape, (kind, _)) in terrain.shapes.iter().enumerate() {
+                            let radius = cap.radius;
+                            for i in 0..2 {
+                                switches.push(Switch::TerrainEnd {
+                                    at: at(i),
+                                    shape,
+                                    radius,
+                                });
+                            }
+                            if !matches!(kind, Shape::Plane { .. }) {
+                                switches.push(Switch::TerrainSide {
+                                    a: at(0),
+                                    b: at(1),
+                                    shape,
+                                    radius,
+                                });
+                            }
+                        }
+                    }
+                }
                 ForceEffect::ForceDensityCables(_)
                 | ForceEffect::NodeForces(_)
                 | ForceEffect::ScriptedLoads(_)
@@ -134,7 +177,11 @@ impl Events {
         }
         let n = model.state_len();
         let ends = model.coords.n_ends();
+        let shapes = model.terrain.as_ref().map_or(Vec::new(), |t| {
+            t.shapes.iter().map(|(s, _)| s.clone()).collect()
+        });
         Self {
+            shapes,
             positive0: vec![false; switches.len()],
             positive1: vec![false; switches.len()],
             switches,
@@ -163,7 +210,14 @@ impl Events {
             std::mem::swap(&mut self.positive0, &mut self.positive1);
         } else {
             end_positions(model, y, &mut self.x0, ws);
-            signs(&self.switches, inputs, &self.x0, &mut self.positive0, ws);
+            signs(
+                &self.switches,
+                &self.shapes,
+                inputs,
+                &self.x0,
+                &mut self.positive0,
+                ws,
+            );
         }
         self.end_known = false;
     }
@@ -180,7 +234,14 @@ impl Events {
         ws: &Workspace,
     ) -> Option<f64> {
         end_positions(model, y, &mut self.x1, ws);
-        signs(&self.switches, inputs, &self.x1, &mut self.positive1, ws);
+        signs(
+            &self.switches,
+            &self.shapes,
+            inputs,
+            &self.x1,
+            &mut self.positive1,
+            ws,
+        );
         let (lo, hi) = (EDGE * h, (1.0 - EDGE) * h);
         let mut earliest: Option<f64> = None;
         let mut velocities = false;
@@ -194,7 +255,10 @@ impl Events {
                 end_velocities(model, &y[half..], &mut self.v1);
                 velocities = true;
             }
-            let (g0, g1) = (value(s, inputs, &self.x0), value(s, inputs, &self.x1));
+            let (g0, g1) = (
+                value(s, &self.shapes, inputs, &self.x0),
+                value(s, &self.shapes, inputs, &self.x1),
+            );
             let theta = self.crossing(s, inputs, g0, g1, h);
             if theta > lo && theta < hi && earliest.is_none_or(|e| theta < e) {
                 earliest = Some(theta);
@@ -256,20 +320,10 @@ impl Events {
         let at = |e: usize| {
             w[0] * self.x0[e] + w[1] * self.v0[e] + w[2] * self.x1[e] + w[3] * self.v1[e]
         };
-        match *s {
-            Switch::Cable { a, b, rest } => {
-                let p = |p: Point| match p {
-                    Point::End(e) => at(e),
-                    Point::Fixed(x) => x,
-                };
-                (p(b) - p(a)).norm() - rest_length(rest, inputs)
-            }
-            Switch::Ground {
-                end,
-                normal,
-                height,
-            } => normal.dot(&at(end)) - height,
-        }
+        switch_value(s, &self.shapes, inputs, |p| match p {
+            Point::End(e) => at(e),
+            Point::Fixed(x) => x,
+        })
     }
 }
 
@@ -283,6 +337,7 @@ fn end_positions(model: &Model, y: &[f64], x: &mut [Vector3<f64>], ws: &Workspac
 /// Whether each switch is positive at the bar-end positions `x` (as [`end_positions`]).
 fn signs(
     switches: &[Switch],
+    shapes: &[Shape],
     inputs: &Inputs,
     x: &[Vector3<f64>],
     out: &mut [bool],
@@ -290,7 +345,7 @@ fn signs(
 ) {
     ws.for_each_half(out, |start, out| {
         for (p, s) in out.iter_mut().zip(&switches[start..]) {
-            *p = positive(s, inputs, x);
+            *p = positive(s, shapes, inputs, x);
         }
     });
 }
@@ -312,7 +367,7 @@ fn rest_length(rest: Rest, inputs: &Inputs) -> f64 {
 /// Whether [`value`] is `> 0`, without its square root where `|s|²` and `s₀²` are not within
 /// round-off of each other (there it takes the root, so the sign is always `value`'s).
 #[inline(always)]
-fn positive(s: &Switch, inputs: &Inputs, x: &[Vector3<f64>]) -> bool {
+fn positive(s: &Switch, shapes: &[Shape], inputs: &Inputs, x: &[Vector3<f64>]) -> bool {
     if let Switch::Cable { a, b, rest } = *s {
         let p = |p: Point| match p {
             Point::End(e) => x[e],
@@ -328,21 +383,40 @@ fn positive(s: &Switch, inputs: &Inputs, x: &[Vector3<f64>]) -> bool {
             return false;
         }
     }
-    value(s, inputs, x) > 0.0
+    value(s, shapes, inputs, x) > 0.0
 }
 
 /// A switch at the bar-end positions `x`.
-fn value(s: &Switch, inputs: &Inputs, x: &[Vector3<f64>]) -> f64 {
-    let p = |p: Point| match p {
+fn value(s: &Switch, shapes: &[Shape], inputs: &Inputs, x: &[Vector3<f64>]) -> f64 {
+    switch_value(s, shapes, inputs, |p| match p {
         Point::End(e) => x[e],
         Point::Fixed(x) => x,
-    };
+    })
+}
+
+/// A switch with its points placed by `p` (ends at a step's end, or along the step).
+#[inline(always)]
+fn switch_value(
+    s: &Switch,
+    shapes: &[Shape],
+    inputs: &Inputs,
+    p: impl Fn(Point) -> Vector3<f64>,
+) -> f64 {
     match *s {
         Switch::Cable { a, b, rest } => (p(b) - p(a)).norm() - rest_length(rest, inputs),
         Switch::Ground {
             end,
             normal,
             height,
-        } => normal.dot(&x[end]) - height,
+        } => normal.dot(&p(Point::End(end))) - height,
+        Switch::TerrainEnd { at, shape, radius } => shapes[shape]
+            .distance(&p(at))
+            .map_or(f64::MAX, |(phi, _)| phi - radius),
+        Switch::TerrainSide {
+            a,
+            b,
+            shape,
+            radius,
+        } => (-interior_excess(&shapes[shape], &p(a), &p(b), radius)).min(f64::MAX),
     }
 }

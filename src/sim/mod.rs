@@ -385,6 +385,11 @@ impl Simulation {
         self.model.supports[k].reaction(&self.model.cables, &self.ws)
     }
 
+    /// What terrain shape `k` does to the structure at the last evaluation.
+    pub fn shape_load(&self, k: usize) -> crate::dynamics::terrain::ShapeLoad {
+        self.ws.shape_load[k]
+    }
+
     /// Total ground force on the structure, N.
     pub fn ground_force(&self) -> Vector3<f64> {
         self.ws.contact_force.iter().sum()

@@ -92,7 +92,7 @@ pub fn penetrations(sim: &Simulation) -> Vec<f64> {
     ground
         .nodes
         .iter()
-        .map(|&(n, _)| ground.penetration(&ws.node_pos[n]))
+        .map(|&(n, _)| ground.penetration(&ws.node_pos[n], 0.0))
         .collect()
 }
 
@@ -115,7 +115,7 @@ pub fn penalty_energy(sim: &Simulation) -> f64 {
     ground
         .nodes
         .iter()
-        .map(|&(n, _)| ground.energy(&ws.node_pos[n]))
+        .map(|&(n, _)| ground.energy(&ws.node_pos[n], 0.0))
         .sum()
 }
 

@@ -78,6 +78,7 @@ pub fn random_scene(seed: u64) -> Scene {
         .map(|&(a, b)| BarSpec {
             nodes: [a + 1, b + 1],
             mass: rng.range(0.5, 2.0),
+            radius: 0.0,
         })
         .collect();
     let cable_pairs = [
@@ -130,6 +131,7 @@ pub fn random_scene(seed: u64) -> Scene {
         loads: Vec::new(),
         point_masses: Vec::new(),
         ground: None,
+        terrain: Vec::new(),
         outputs: None,
         prestress: None,
         start: Default::default(),

@@ -175,6 +175,7 @@ pub fn bar(a: usize, b: usize) -> BarSpec {
     BarSpec {
         nodes: [a, b],
         mass: 1.0,
+        radius: 0.0,
     }
 }
 
@@ -204,6 +205,7 @@ pub fn bare(name: &str, nodes: Vec<[f64; 3]>, fixed: Vec<usize>) -> Scene {
         loads: Vec::new(),
         point_masses: Vec::new(),
         ground: None,
+        terrain: Vec::new(),
         outputs: None,
         prestress: None,
         start: Default::default(),

@@ -133,12 +133,12 @@ fn split_forces(
 ) -> Option<([Vec<ForceEffect>; 2], Vec<ForceEffect>)> {
     let serial_from = effects
         .iter()
-        .position(|e| matches!(e, ForceEffect::GroundContact(_)))
+        .position(|e| matches!(e, ForceEffect::GroundContact(_) | ForceEffect::Terrain(_)))
         .unwrap_or(effects.len());
     let after = effects[serial_from..].to_vec();
     if after
         .iter()
-        .any(|e| !matches!(e, ForceEffect::GroundContact(_)))
+        .any(|e| !matches!(e, ForceEffect::GroundContact(_) | ForceEffect::Terrain(_)))
     {
         return None;
     }
@@ -192,7 +192,9 @@ fn split_forces(
                 ForceEffect::Gravity(w) => ForceEffect::Gravity(
                     w.iter().filter(|(e, _)| owner(*e) == t).copied().collect(),
                 ),
-                ForceEffect::GroundContact(_) => unreachable!("applied after the halves"),
+                ForceEffect::GroundContact(_) | ForceEffect::Terrain(_) => {
+                    unreachable!("applied after the halves")
+                }
             })
             .collect()
     };

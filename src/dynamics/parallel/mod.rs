@@ -86,6 +86,9 @@ impl ForceSink for HalfSink {
     fn contact(&mut self, _: usize, _: Vector3<f64>) {
         unreachable!("ground contact is applied after the halves")
     }
+    fn shape_loads(&mut self) -> &mut [super::terrain::ShapeLoad] {
+        unreachable!("terrain contact is applied after the halves")
+    }
 }
 
 /// [`super::evaluate`] on two threads (the sparse basis, see [`Halves::new`]): this one and
@@ -155,6 +158,7 @@ pub(super) fn evaluate(
                     end_force: &mut ws.end_force,
                     gamma: &mut ws.gamma,
                     contact_force: &mut ws.contact_force,
+                    shape_load: &mut ws.shape_load,
                 };
                 effects::apply(&halves.after, inputs, t, nodes, &mut sink);
             }

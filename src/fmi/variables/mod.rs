@@ -57,6 +57,23 @@ pub enum Binding {
     PointMass(usize),
     /// A setting of scripted load `k`.
     Load(usize, LoadField),
+    /// Radius of bar `i`'s capsule.
+    Radius(usize),
+    /// A contact setting of terrain shape `k`.
+    Terrain(usize, TerrainField),
+}
+
+/// The contact settings of a terrain shape exposed as parameters.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum TerrainField {
+    /// `terrain[k].stiffness`.
+    Stiffness,
+    /// `terrain[k].damping`.
+    Damping,
+    /// `terrain[k].friction`.
+    Friction,
+    /// `terrain[k].slip_velocity`.
+    SlipVelocity,
 }
 
 /// The ground-plane settings exposed as parameters.
@@ -131,7 +148,7 @@ pub struct VariableTable {
 }
 
 /// Units used by the table, with their base-unit exponents `(kg, m, s, rad)`.
-pub const UNITS: [(&str, [i32; 4]); 12] = [
+pub const UNITS: [(&str, [i32; 4]); 13] = [
     ("m", [0, 1, 0, 0]),
     ("m/s", [0, 1, -1, 0]),
     ("m2/s", [0, 2, -1, 0]),
@@ -144,6 +161,7 @@ pub const UNITS: [(&str, [i32; 4]); 12] = [
     ("m/s2", [0, 1, -2, 0]),
     ("Hz", [0, 0, -1, 0]),
     ("rad", [0, 0, 0, 1]),
+    ("1", [0, 0, 0, 0]),
 ];
 
 impl VariableTable {

@@ -3,7 +3,7 @@
 
 use fmi2_model_description::{Causality, Initial, Variability};
 
-use super::{is_tunable, BaseType, Binding, GroundField, LoadField, Variable, AXES};
+use super::{is_tunable, BaseType, Binding, GroundField, LoadField, TerrainField, Variable, AXES};
 use crate::model::{CableLaw, Model};
 use crate::scene::LoadSpec;
 
@@ -138,6 +138,20 @@ pub(super) fn parameters(model: &Model, vars: &mut Vec<Variable>) {
             Binding::Mass(i),
         ));
     }
+    // A radius matters once something touches the bars' capsules.
+    let touched = model.terrain.is_some() || model.bars.iter().any(|b| b.radius > 0.0);
+    for (i, bar) in model.bars.iter().enumerate().filter(|_| touched) {
+        vars.push(parameter(
+            format!("bar[{}].radius", i + 1),
+            Some("m"),
+            format!(
+                "radius of bar {}'s capsule, where it touches terrain",
+                i + 1
+            ),
+            bar.radius,
+            Binding::Radius(i),
+        ));
+    }
 }
 
 /// Parameters of the optional effects: only those the scene declares.
@@ -213,6 +227,48 @@ pub(super) fn effect_parameters(model: &Model, vars: &mut Vec<Variable>) {
     }
     for (k, load) in scene.loads.iter().enumerate() {
         load_parameters(k, load, vars);
+    }
+    for (k, t) in scene.terrain.iter().enumerate() {
+        let shape = format!("terrain[{}] ({})", k + 1, t.kind.name());
+        let fields = [
+            (
+                TerrainField::Stiffness,
+                "stiffness",
+                Some("N/m"),
+                "penalty stiffness of contact",
+                t.stiffness,
+            ),
+            (
+                TerrainField::Damping,
+                "damping",
+                Some("N.s/m"),
+                "penalty damping on the normal approach speed",
+                t.damping,
+            ),
+            (
+                TerrainField::Friction,
+                "friction",
+                None,
+                "Coulomb friction coefficient",
+                t.friction,
+            ),
+            (
+                TerrainField::SlipVelocity,
+                "slip_velocity",
+                Some("m/s"),
+                "tangential speed below which friction is viscous (regularised Coulomb)",
+                t.slip_velocity,
+            ),
+        ];
+        for (field, name, unit, description, value) in fields {
+            vars.push(parameter(
+                format!("terrain[{}].{name}", k + 1),
+                unit,
+                format!("{shape}: {description}"),
+                value,
+                Binding::Terrain(k, field),
+            ));
+        }
     }
 }
 

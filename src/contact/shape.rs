@@ -1,0 +1,233 @@
+//! Terrain shapes as signed distance functions `φ(x)` (m, positive outside) with their
+//! outward unit normals, and the points along a segment where `φ` is not smooth, which
+//! the capsule contact samples.
+
+use nalgebra::{Matrix3, Vector3};
+
+/// One terrain shape.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Shape {
+    /// The half-space `n·x ≤ h`.
+    Plane {
+        /// Unit outward normal.
+        normal: Vector3<f64>,
+        /// Offset h along the normal, m.
+        offset: f64,
+    },
+    /// A box.
+    Cuboid {
+        /// Centre, m.
+        center: Vector3<f64>,
+        /// Its axes in world coordinates (columns), orthonormal.
+        axes: Matrix3<f64>,
+        /// Half edge lengths along those axes, m.
+        half: Vector3<f64>,
+    },
+    /// Ground `z ≤ h(x, y)` over a grid of heights.
+    Heightfield(Grid),
+}
+
+/// A grid of heights, interpolated bilinearly.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Grid {
+    /// `(x, y)` of the first height, m.
+    pub origin: [f64; 2],
+    /// Spacing along x and y, m.
+    pub spacing: [f64; 2],
+    /// Heights along x.
+    pub nx: usize,
+    /// Heights along y.
+    pub ny: usize,
+    /// `heights[j * nx + i]` at `(x₀ + i dx, y₀ + j dy)`, m.
+    pub heights: Vec<f64>,
+    /// The highest height, m.
+    pub top: f64,
+}
+
+impl Grid {
+    /// A grid from rows of heights (row j at `y₀ + j dy`), all of one length ≥ 2, at least 2.
+    pub fn new(origin: [f64; 2], spacing: [f64; 2], rows: &[Vec<f64>]) -> Self {
+        let heights: Vec<f64> = rows.iter().flatten().copied().collect();
+        let top = heights.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+        Self {
+            origin,
+            spacing,
+            nx: rows[0].len(),
+            ny: rows.len(),
+            heights,
+            top,
+        }
+    }
+
+    /// The far corner `(x, y)` of the grid, m.
+    pub fn end(&self) -> [f64; 2] {
+        [
+            self.origin[0] + (self.nx - 1) as f64 * self.spacing[0],
+            self.origin[1] + (self.ny - 1) as f64 * self.spacing[1],
+        ]
+    }
+
+    /// Height and gradient `(h, ∂h/∂x, ∂h/∂y)` at `(x, y)`; `None` outside the grid.
+    pub fn height(&self, x: f64, y: f64) -> Option<(f64, f64, f64)> {
+        let fx = (x - self.origin[0]) / self.spacing[0];
+        let fy = (y - self.origin[1]) / self.spacing[1];
+        let (mx, my) = ((self.nx - 1) as f64, (self.ny - 1) as f64);
+        if !(0.0..=mx).contains(&fx) || !(0.0..=my).contains(&fy) {
+            return None;
+        }
+        let i = (fx.floor() as usize).min(self.nx - 2);
+        let j = (fy.floor() as usize).min(self.ny - 2);
+        let (u, v) = (fx - i as f64, fy - j as f64);
+        let at = |i: usize, j: usize| self.heights[j * self.nx + i];
+        let (h00, h10, h01, h11) = (at(i, j), at(i + 1, j), at(i, j + 1), at(i + 1, j + 1));
+        let h =
+            h00 * (1.0 - u) * (1.0 - v) + h10 * u * (1.0 - v) + h01 * (1.0 - u) * v + h11 * u * v;
+        let hx = ((h10 - h00) * (1.0 - v) + (h11 - h01) * v) / self.spacing[0];
+        let hy = ((h01 - h00) * (1.0 - u) + (h11 - h10) * u) / self.spacing[1];
+        Some((h, hx, hy))
+    }
+}
+
+impl Shape {
+    /// A box from its centre, full edge lengths and yaw about z (degrees).
+    pub fn cuboid(center: [f64; 3], size: [f64; 3], yaw_degrees: f64) -> Self {
+        let (s, c) = yaw_degrees.to_radians().sin_cos();
+        let axes = Matrix3::new(c, -s, 0.0, s, c, 0.0, 0.0, 0.0, 1.0);
+        Self::Cuboid {
+            center: Vector3::from(center),
+            axes,
+            half: Vector3::from(size) * 0.5,
+        }
+    }
+
+    /// A plane through `point` with outward `normal` (any length > 0).
+    pub fn plane(point: [f64; 3], normal: [f64; 3]) -> Self {
+        let n = Vector3::from(normal).normalize();
+        Self::Plane {
+            normal: n,
+            offset: n.dot(&Vector3::from(point)),
+        }
+    }
+
+    /// Signed distance `φ(x)` (m, negative inside) and the outward unit normal there;
+    /// `None` where the shape cannot touch (beside a heightfield's grid).
+    #[inline]
+    pub fn distance(&self, x: &Vector3<f64>) -> Option<(f64, Vector3<f64>)> {
+        match self {
+            Self::Plane { normal, offset } => Some((normal.dot(x) - offset, *normal)),
+            Self::Cuboid { center, axes, half } => {
+                let p = axes.tr_mul(&(x - center));
+                let q = p.abs() - half;
+                let outside = q.map(|v| v.max(0.0));
+                let d = outside.norm();
+                if d > 0.0 {
+                    let local = outside.component_mul(&p.map(f64::signum)) / d;
+                    Some((d, axes * local))
+                } else {
+                    let k = q.imax();
+                    Some((q[k], axes.column(k) * p[k].signum()))
+                }
+            }
+            Self::Heightfield(grid) => {
+                let (h, hx, hy) = grid.height(x.x, x.y)?;
+                let n = Vector3::new(-hx, -hy, 1.0).normalize();
+                Some(((x.z - h) * n.z, n))
+            }
+        }
+    }
+
+    /// Whether a capsule around `a`–`b` of radius `r` may touch the shape: a cheap bound,
+    /// so that shapes far from a bar cost one test.
+    #[inline]
+    pub fn may_touch(&self, a: &Vector3<f64>, b: &Vector3<f64>, r: f64) -> bool {
+        match self {
+            Self::Plane { normal, offset } => normal.dot(a).min(normal.dot(b)) - r < *offset,
+            Self::Cuboid { center, half, .. } => {
+                // The box's circumscribed sphere against the segment.
+                let reach = half.norm() + r;
+                segment_point_distance2(a, b, center) < reach * reach
+            }
+            Self::Heightfield(grid) => {
+                let end = grid.end();
+                a.z.min(b.z) - r < grid.top
+                    && a.x.max(b.x) + r >= grid.origin[0]
+                    && a.x.min(b.x) - r <= end[0]
+                    && a.y.max(b.y) + r >= grid.origin[1]
+                    && a.y.min(b.y) - r <= end[1]
+            }
+        }
+    }
+
+    /// Calls `f(s)` for each `s ∈ (0, 1)` where `φ(a + s (b − a))` has a kink: where the
+    /// segment crosses a box's face planes, the planes inside it where the nearest face
+    /// changes, or a heightfield's grid lines. A plane has none.
+    pub fn kinks(&self, a: &Vector3<f64>, b: &Vector3<f64>, mut f: impl FnMut(f64)) {
+        let mut inside = |s: f64| {
+            if s > 0.0 && s < 1.0 {
+                f(s)
+            }
+        };
+        match self {
+            Self::Plane { .. } => {}
+            Self::Cuboid { center, axes, half } => {
+                let pa = axes.tr_mul(&(a - center));
+                let d = axes.tr_mul(&(b - a));
+                for k in 0..3 {
+                    if d[k] != 0.0 {
+                        inside((half[k] - pa[k]) / d[k]);
+                        inside((-half[k] - pa[k]) / d[k]);
+                    }
+                }
+                // |p_k| − h_k = |p_l| − h_l where those two are the largest: inside the box,
+                // where the nearest face changes from k to l.
+                for (k, l) in [(0, 1), (0, 2), (1, 2)] {
+                    for (sk, sl) in [(1.0, 1.0), (1.0, -1.0), (-1.0, 1.0), (-1.0, -1.0)] {
+                        let den = sk * d[k] - sl * d[l];
+                        if den == 0.0 {
+                            continue;
+                        }
+                        let s = (half[k] - half[l] - sk * pa[k] + sl * pa[l]) / den;
+                        let p = pa + d * s;
+                        let q = p.abs() - half;
+                        let m = 3 - k - l;
+                        if sk * p[k] >= 0.0 && sl * p[l] >= 0.0 && q[k] <= 0.0 && q[k] >= q[m] {
+                            inside(s);
+                        }
+                    }
+                }
+            }
+            Self::Heightfield(grid) => {
+                for axis in 0..2 {
+                    let (ea, eb) = (a[axis], b[axis]);
+                    if ea == eb {
+                        continue;
+                    }
+                    let (o, h) = (grid.origin[axis], grid.spacing[axis]);
+                    let n = if axis == 0 { grid.nx } else { grid.ny };
+                    let (lo, hi) = (ea.min(eb), ea.max(eb));
+                    let first = (((lo - o) / h).ceil().max(0.0)) as usize;
+                    let last = ((hi - o) / h).floor();
+                    if last < 0.0 {
+                        continue;
+                    }
+                    let last = (last as usize).min(n - 1);
+                    for i in first..=last {
+                        inside((o + i as f64 * h - ea) / (eb - ea));
+                    }
+                }
+            }
+        }
+    }
+}
+
+/// `|x − closest point of segment a–b|²`.
+fn segment_point_distance2(a: &Vector3<f64>, b: &Vector3<f64>, x: &Vector3<f64>) -> f64 {
+    let d = b - a;
+    let len2 = d.norm_squared();
+    let s = if len2 > 0.0 {
+        ((x - a).dot(&d) / len2).clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
+    (a + d * s - x).norm_squared()
+}

@@ -1,0 +1,67 @@
+//! The terrain as the step sees it: each shape with its penalty law, and each bar as a
+//! capsule between the nodes it joins.
+
+use super::effects::Target;
+use crate::contact::{Grid, Penalty, Shape};
+use crate::scene::{TerrainKind, TerrainSpec};
+
+/// A bar's capsule.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Capsule {
+    /// Bar index.
+    pub bar: usize,
+    /// Its nodes (0-based).
+    pub nodes: [usize; 2],
+    /// The bar ends that carry them.
+    pub ends: [Target; 2],
+    /// Radius, m.
+    pub radius: f64,
+}
+
+/// Terrain shapes and the capsules that touch them.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Terrain {
+    /// Shapes in scene order, each with its contact law.
+    pub shapes: Vec<(Shape, Penalty)>,
+    /// Every bar whose capsule can move (a bar with both ends pinned never touches).
+    pub capsules: Vec<Capsule>,
+}
+
+impl Terrain {
+    /// The terrain of validated specs for the given capsules.
+    pub fn new(specs: &[TerrainSpec], capsules: Vec<Capsule>) -> Self {
+        let shapes = specs
+            .iter()
+            .map(|t| {
+                let penalty = Penalty {
+                    stiffness: t.stiffness,
+                    damping: t.damping,
+                    friction: t.friction,
+                    slip_velocity: t.slip_velocity,
+                };
+                (shape(t), penalty)
+            })
+            .collect();
+        Self { shapes, capsules }
+    }
+}
+
+/// The shape of a validated spec.
+pub fn shape(t: &TerrainSpec) -> Shape {
+    match t.kind {
+        TerrainKind::Plane => Shape::plane(
+            t.point.expect("validated"),
+            t.normal.unwrap_or([0.0, 0.0, 1.0]),
+        ),
+        TerrainKind::Box => Shape::cuboid(
+            t.center.expect("validated"),
+            t.size.expect("validated"),
+            t.yaw.unwrap_or(0.0),
+        ),
+        TerrainKind::Heightfield => Shape::Heightfield(Grid::new(
+            t.origin.expect("validated"),
+            t.spacing.expect("validated"),
+            t.heights.as_ref().expect("validated"),
+        )),
+    }
+}
