@@ -7,7 +7,8 @@
 //! - Between the ends the gap is smooth except at the shape's kinks (a box's edges and
 //!   the planes where its nearest face changes, a heightfield's grid lines), so the bar's
 //!   side touches there. Such a point carries only the depth its ends do not already
-//!   carry, `e(s) = d(s) − [(1 − s) d₀⁺ + s d₁⁺]` (`x⁺ = max(x, 0)`), when `e > 0`. This
+//!   carry, `e(s) = d(s) − [(1 − s) d₀⁺ + s d₁⁺]` (`x⁺ = max(x, 0)`), less a round-off
+//!   slack of 1e-10 m, when that is positive. This
 //!   keeps every force continuous: a kink that reaches an end carries nothing there, and
 //!   a heightfield that is a plane gives exactly the plane's two end contacts.
 //!
@@ -17,6 +18,11 @@
 use nalgebra::Vector3;
 
 use super::Shape;
+
+/// Excess depth a kink must pass before it carries load, m: the round-off of a depth that
+/// is linear along the bar stays far below it, so a heightfield that is a plane adds no
+/// contact of 1e-17 m (nor events), and the force still grows continuously from 0.
+pub const KINK_SLACK: f64 = 1e-10;
 
 /// One contact point of a capsule.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -62,7 +68,7 @@ pub fn capsule_contacts(
     }
     shape.kinks(a, b, |s| {
         if let Some((d, normal)) = depth(shape, &(a + (b - a) * s), r) {
-            let excess = d - ((1.0 - s) * ends[0] + s * ends[1]);
+            let excess = d - ((1.0 - s) * ends[0] + s * ends[1]) - KINK_SLACK;
             if excess > 0.0 {
                 each(Contact {
                     s,
@@ -74,8 +80,9 @@ pub fn capsule_contacts(
     });
 }
 
-/// The largest excess `e(s)` over the kinks between the ends (`−∞` without kinks that
-/// can touch): positive once the bar's side touches. Event location watches its sign.
+/// The largest excess `e(s) − KINK_SLACK` over the kinks between the ends (`−∞` without
+/// kinks that can touch): positive once the bar's side touches. Event location watches
+/// its sign.
 pub fn interior_excess(shape: &Shape, a: &Vector3<f64>, b: &Vector3<f64>, r: f64) -> f64 {
     let mut most = f64::NEG_INFINITY;
     if !shape.may_touch(a, b, r) {
@@ -85,7 +92,7 @@ pub fn interior_excess(shape: &Shape, a: &Vector3<f64>, b: &Vector3<f64>, r: f64
     let (d0, d1) = (end(a), end(b));
     shape.kinks(a, b, |s| {
         if let Some((d, _)) = depth(shape, &(a + (b - a) * s), r) {
-            most = most.max(d - ((1.0 - s) * d0 + s * d1));
+            most = most.max(d - ((1.0 - s) * d0 + s * d1) - KINK_SLACK);
         }
     });
     most

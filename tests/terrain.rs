@@ -1,0 +1,203 @@
+//! Terrain contact against closed forms: a bar resting across two boxes, a bar tipping over
+//! a box's edge as the lever says, a body sliding down a steep plane, and a heightfield
+//! that is a plane giving the plane's trajectory.
+
+use nalgebra::Vector3;
+use tensegrity_fmu::{Model, Scene, Simulation};
+
+const G: f64 = 9.81;
+
+fn sim(toml: &str) -> Simulation {
+    let scene = Scene::from_toml_str(toml).unwrap();
+    Simulation::new(Model::new(&scene).unwrap())
+}
+
+/// A single bar of mass `m` from `a` to `b` with radius `r` and gravity, then `terrain`.
+fn bar_scene(a: [f64; 3], b: [f64; 3], m: f64, r: f64, rest: &str) -> String {
+    format!(
+        "name = \"bar\"\nnodes = [{a:?}, {b:?}]\n\
+         bars = [{{ nodes = [1, 2], mass = {m}, radius = {r} }}]\n\
+         gravity = [0.0, 0.0, -{G}]\n{rest}"
+    )
+}
+
+fn terrain_box(center: [f64; 3], size: [f64; 3], k: f64, c: f64, mu: f64) -> String {
+    format!(
+        "[[terrain]]\nkind = \"box\"\ncenter = {center:?}\nsize = {size:?}\n\
+         stiffness = {k}\ndamping = {c}\nfriction = {mu}\n"
+    )
+}
+
+#[test]
+fn a_bar_across_two_boxes_rests_at_box_top_plus_radius() {
+    let (m, r, k, top) = (2.0, 0.05, 1e5, 0.5);
+    let boxes = terrain_box([-0.6, 0.0, 0.25], [0.4, 1.0, 0.5], k, 400.0, 0.5)
+        + &terrain_box([0.6, 0.0, 0.25], [0.4, 1.0, 0.5], k, 400.0, 0.5);
+    let mut s = sim(&bar_scene([-1.0, 0.0, 0.6], [1.0, 0.0, 0.6], m, r, &boxes));
+    s.advance_to(3.0).unwrap();
+    s.refresh();
+    // The ends overhang both boxes: the bar rests on the four edges it crosses, each
+    // carrying a quarter of its weight at a depth of m g / (4 k).
+    let expected = top + r - m * G / (4.0 * k);
+    for n in 0..2 {
+        let z = s.node_position(n).z;
+        assert!(
+            (z - expected).abs() < 1e-7,
+            "node {}: z = {z}, expected {expected}",
+            n + 1
+        );
+    }
+    for shape in 0..2 {
+        let load = s.shape_load(shape);
+        assert_eq!(
+            load.contacts,
+            2,
+            "box {} touches at its two edges",
+            shape + 1
+        );
+        assert!(
+            (load.force.z - m * G / 2.0).abs() < 1e-6,
+            "{:?}",
+            load.force
+        );
+    }
+}
+
+/// The angle of the bar below the horizontal (positive: node 2 lower), rad.
+fn tilt(s: &Simulation) -> f64 {
+    let d = s.node_position(1) - s.node_position(0);
+    (-d.z).atan2(d.xy().norm())
+}
+
+#[test]
+fn a_bar_on_a_box_edge_tips_the_way_the_lever_says() {
+    // A box whose top edge runs along y at x = 0, z = 0.5; a bar of length 1 lies on it,
+    // its capsule touching the edge and the top face at its left end.
+    let (m, r, k, c) = (1.0, 0.02, 1e6, 2000.0);
+    let edge = terrain_box([-0.5, 0.0, 0.25], [1.0, 1.0, 0.5], k, c, 1.0);
+    let z = 0.5 + r;
+    // Centre of mass d = 0.2 m beyond the edge: the bar turns about the edge with
+    // α = m g d / (m L²/12 + m d²), so θ(t) = α t²/2 while the angle is small.
+    let d = 0.2;
+    let mut over = sim(&bar_scene(
+        [d - 0.5, 0.0, z],
+        [d + 0.5, 0.0, z],
+        m,
+        r,
+        &edge,
+    ));
+    let alpha = G * d / (1.0 / 12.0 + d * d);
+    let t = 0.1;
+    over.advance_to(t).unwrap();
+    let expected = 0.5 * alpha * t * t;
+    let theta = tilt(&over);
+    println!("tipping: θ({t}) = {theta:.6} rad, lever {expected:.6} rad");
+    assert!(
+        over.node_position(0).z > z + 0.01,
+        "the end on the box lifts"
+    );
+    assert!(
+        (theta - expected).abs() < 0.01 * expected,
+        "θ = {theta}, lever {expected}"
+    );
+    // Centre of mass 0.2 m short of the edge: the bar rests on its end and the edge.
+    let mut short = sim(&bar_scene(
+        [-d - 0.5, 0.0, z],
+        [-d + 0.5, 0.0, z],
+        m,
+        r,
+        &edge,
+    ));
+    short.advance_to(1.0).unwrap();
+    let theta = tilt(&short);
+    println!("resting: θ(1) = {theta:.3e} rad");
+    assert!(theta.abs() < 1e-4, "θ = {theta}");
+    assert!((short.node_position(0).z - z).abs() < 1e-4);
+}
+
+/// A one-stage prism (3 bars of 1 kg, elastic cables) with its base on the plane through
+/// the origin of outward normal `n = (−sin θ, 0, cos θ)`, and that plane as terrain
+/// (`kind` plane, or a heightfield with the same surface).
+fn prism_on_slope(theta: f64, mu: f64, heightfield: bool) -> Simulation {
+    let mut scene = tensegrity_fmu::scene::tower_scene(1, Some(2000.0), "prism");
+    scene.fixed.clear();
+    scene.force_inputs.clear();
+    scene.gravity = Some([0.0, 0.0, -G]);
+    let (s, c) = theta.sin_cos();
+    let (k, depth) = (1e5, 3.0 * G / 3.0 / 1e5);
+    for p in &mut scene.nodes {
+        // Rotate about y by −θ so that the base lies in the slope, sunk to its static depth.
+        let (x, z) = (p[0], p[2] - depth);
+        *p = [c * x - s * z, p[1], s * x + c * z];
+    }
+    let shape = if heightfield {
+        // h(x, y) = x tan θ on a grid wide enough for the whole run.
+        let (nx, ny, dx) = (41, 9, 0.25);
+        let rows: Vec<String> = (0..ny)
+            .map(|_| {
+                let row: Vec<String> = (0..nx)
+                    .map(|i| format!("{:?}", (-8.0 + i as f64 * dx) * theta.tan()))
+                    .collect();
+                format!("[{}]", row.join(", "))
+            })
+            .collect();
+        format!(
+            "kind = \"heightfield\"\norigin = [-8.0, -1.0]\nspacing = [{dx}, 0.25]\nheights = [{}]\n",
+            rows.join(", ")
+        )
+    } else {
+        format!(
+            "kind = \"plane\"\npoint = [0.0, 0.0, 0.0]\nnormal = [{:?}, 0.0, {c:?}]\n",
+            -s
+        )
+    };
+    let text = format!(
+        "{}\n[[terrain]]\n{shape}stiffness = {k}\ndamping = 300.0\nfriction = {mu}\n",
+        scene.to_toml_string()
+    );
+    sim(&text)
+}
+
+#[test]
+fn a_prism_slides_down_a_steep_plane_at_g_sin_minus_mu_cos() {
+    let (theta, mu) = (30f64.to_radians(), 0.3);
+    let mut s = prism_on_slope(theta, mu, false);
+    let mass = 3.0;
+    let downhill = Vector3::new(-theta.cos(), 0.0, -theta.sin());
+    let speed = |s: &mut Simulation| {
+        s.refresh();
+        s.linear_momentum().dot(&downhill) / mass
+    };
+    let (t1, t2) = (0.3, 0.8);
+    s.advance_to(t1).unwrap();
+    let v1 = speed(&mut s);
+    s.advance_to(t2).unwrap();
+    let v2 = speed(&mut s);
+    let a = (v2 - v1) / (t2 - t1);
+    let expected = G * (theta.sin() - mu * theta.cos());
+    println!("sliding: a = {a:.5} m/s², g (sin θ − μ cos θ) = {expected:.5} m/s²");
+    assert!(
+        (a - expected).abs() < 0.02 * expected,
+        "a = {a}, expected {expected}"
+    );
+}
+
+#[test]
+fn a_heightfield_that_is_a_plane_gives_the_plane_s_trajectory() {
+    let (theta, mu) = (20f64.to_radians(), 0.2);
+    let mut plane = prism_on_slope(theta, mu, false);
+    let mut field = prism_on_slope(theta, mu, true);
+    let mut worst: f64 = 0.0;
+    for step in 1..=10 {
+        let t = 0.1 * f64::from(step);
+        plane.advance_to(t).unwrap();
+        field.advance_to(t).unwrap();
+        for n in 0..6 {
+            worst = worst.max((plane.node_position(n) - field.node_position(n)).norm());
+        }
+    }
+    let moved = (plane.node_position(0) - field.model().positions[0]).norm();
+    println!("heightfield vs plane: {worst:.3e} m apart after sliding {moved:.3} m");
+    assert!(moved > 0.1, "the prism slides: {moved} m");
+    assert!(worst < 1e-9, "{worst} m apart");
+}
