@@ -9,6 +9,7 @@
 
 use nalgebra::Vector3;
 
+use crate::contact::Penalty;
 use crate::dynamics::{self, Inputs, Workspace};
 use crate::model::{CableLaw, Model};
 use crate::scene::LoadSpec;
@@ -31,6 +32,10 @@ pub enum Cause {
     GroundPenalty,
     /// Ground friction, viscous below the slip velocity: `μ W w / v_s`.
     Friction,
+    /// Terrain shape k's penalty oscillator (0-based), as the ground's.
+    TerrainPenalty(usize),
+    /// Terrain shape k's friction, viscous below its slip velocity, as the ground's.
+    TerrainFriction(usize),
     /// The structure's fastest mode with no cable or contact dominating its stiffness
     /// (bars' constraint forces, many comparable terms).
     Structure,
@@ -66,24 +71,50 @@ const NAMED: usize = 3;
 /// The ground's two rates: the penalty oscillator and the viscous friction (0 without a
 /// ground or friction), at the most compliant contact end.
 pub fn contact_rates(model: &Model) -> Vec<Rate> {
-    let Some(ground) = &model.ground else {
-        return Vec::new();
+    let mut rates = Vec::new();
+    let mut push = |law: Penalty, w: f64, node, causes: [Cause; 2]| {
+        let [penalty, friction] = causes;
+        rates.push(Rate {
+            omega: (law.stiffness * w).sqrt() + law.damping * w,
+            cause: penalty,
+            node,
+        });
+        rates.push(Rate {
+            omega: law.friction * weight(model) * w / law.slip_velocity,
+            cause: friction,
+            node,
+        });
     };
-    let (w, node) = contact_compliance(model);
-    let oscillator = (ground.stiffness * w).sqrt() + ground.damping * w;
-    let friction = ground.friction * weight(model) * w / ground.slip_velocity;
-    vec![
-        Rate {
-            omega: oscillator,
-            cause: Cause::GroundPenalty,
-            node,
-        },
-        Rate {
-            omega: friction,
-            cause: Cause::Friction,
-            node,
-        },
-    ]
+    if let Some(ground) = &model.ground {
+        let (w, node) = contact_compliance(model);
+        push(ground.penalty(), w, node, [Cause::GroundPenalty, Cause::Friction]);
+    }
+    if model.terrain.is_some() {
+        let (w, node) = terrain_compliance(model);
+        for (k, law) in terrain_laws(model).enumerate() {
+            push(law, w, node, [Cause::TerrainPenalty(k), Cause::TerrainFriction(k)]);
+        }
+    }
+    rates
+}
+
+/// The terrain shapes' contact laws, in scene order.
+fn terrain_laws(model: &Model) -> impl Iterator<Item = Penalty> + '_ {
+    model.terrain.iter().flat_map(|t| t.shapes.iter().map(|(_, law)| *law))
+}
+
+/// The largest end compliance among the bars that touch terrain, 1/kg, and its node: a
+/// point along a bar is never more compliant than the bar's ends.
+fn terrain_compliance(model: &Model) -> (f64, Option<usize>) {
+    let Some(terrain) = &model.terrain else {
+        return (0.0, None);
+    };
+    terrain
+        .capsules
+        .iter()
+        .flat_map(|c| (0..2).filter_map(move |i| c.ends[i].map(|e| (e, c.nodes[i]))))
+        .map(|(e, n)| (model.inertia[e / 2].w[e % 2][e % 2], Some(n)))
+        .fold((0.0, None), |best, c| if c.0 > best.0 { c } else { best })
 }
 
 /// The largest end compliance `w` among the contact points, 1/kg, and its node.
@@ -202,6 +233,32 @@ impl Rate {
                     num(w)
                 )
             }
+            Cause::TerrainPenalty(k) => {
+                let law = terrain_laws(model).nth(*k).expect("a shape");
+                format!(
+                    "the contact penalty of terrain[{k1}], terrain[{k1}].stiffness = {} N/m with \
+                     terrain[{k1}].damping = {} N·s/m (rate √(k w) + c w, with the end \
+                     compliance w = {} 1/kg of {at})",
+                    num(law.stiffness),
+                    num(law.damping),
+                    num(terrain_compliance(model).0),
+                    k1 = k + 1
+                )
+            }
+            Cause::TerrainFriction(k) => {
+                let law = terrain_laws(model).nth(*k).expect("a shape");
+                format!(
+                    "the friction of terrain[{k1}], terrain[{k1}].friction = {} with \
+                     terrain[{k1}].slip_velocity = {} m/s (below the slip velocity friction is \
+                     viscous: rate μ W w / slip_velocity, with the weight W = {} N and the end \
+                     compliance w = {} 1/kg of {at})",
+                    num(law.friction),
+                    num(law.slip_velocity),
+                    num(weight(model)),
+                    num(terrain_compliance(model).0),
+                    k1 = k + 1
+                )
+            }
             Cause::Structure => format!(
                 "the structure's fastest mode, which no single cable or contact dominates (it \
                  moves {at} most)"
@@ -252,29 +309,21 @@ impl Rate {
             Cause::GroundPenalty => {
                 let g = model.ground.as_ref()?;
                 let w = contact_compliance(model).0;
-                let damped = g.damping * w;
-                Some(if damped < 0.5 * target {
-                    format!(
-                        "ground.stiffness ≤ {} N/m (a softer ground penalty)",
-                        num((target - damped).powi(2) / w)
-                    )
-                } else {
-                    format!(
-                        "ground.stiffness ≤ {} N/m with ground.damping ≤ {} N·s/m",
-                        num((0.5 * target).powi(2) / w),
-                        num(0.5 * target / w)
-                    )
-                })
+                Some(soften_penalty("ground", g.penalty(), w, target))
             }
             Cause::Friction => {
                 let g = model.ground.as_ref()?;
-                let slip = round_up(g.slip_velocity * self.omega / target);
-                Some(format!(
-                    "raise ground.slip_velocity to ≥ {} m/s (the rate falls as 1/slip_velocity: \
-                     ÷ {})",
-                    num(slip),
-                    num(slip / g.slip_velocity)
-                ))
+                Some(raise_slip("ground.slip_velocity", g.slip_velocity, self.omega, target))
+            }
+            Cause::TerrainPenalty(k) => {
+                let law = terrain_laws(model).nth(*k)?;
+                let w = terrain_compliance(model).0;
+                Some(soften_penalty(&format!("terrain[{}]", k + 1), law, w, target))
+            }
+            Cause::TerrainFriction(k) => {
+                let law = terrain_laws(model).nth(*k)?;
+                let key = format!("terrain[{}].slip_velocity", k + 1);
+                Some(raise_slip(&key, law.slip_velocity, self.omega, target))
             }
             Cause::CableDamping(j) => Some(format!(
                 "cables[{}].damping ≤ {} N·s/m",
@@ -486,4 +535,33 @@ pub fn node_displacements(
     let x = ws.node_pos.clone();
     let dx = moved.iter().zip(&x).map(|(m, p)| (m - p) / eps).collect();
     (x, dx)
+}
+
+/// The penalty settings of `key` (`ground`, `terrain[2]`) that bring its oscillator's rate
+/// `√(k w) + c w` down to `target`.
+fn soften_penalty(key: &str, law: Penalty, w: f64, target: f64) -> String {
+    let damped = law.damping * w;
+    if damped < 0.5 * target {
+        format!(
+            "{key}.stiffness ≤ {} N/m (a softer contact penalty)",
+            num((target - damped).powi(2) / w)
+        )
+    } else {
+        format!(
+            "{key}.stiffness ≤ {} N/m with {key}.damping ≤ {} N·s/m",
+            num((0.5 * target).powi(2) / w),
+            num(0.5 * target / w)
+        )
+    }
+}
+
+/// Raising the slip velocity `key` (now `slip`) so that the viscous friction's rate falls
+/// from `omega` to `target`.
+fn raise_slip(key: &str, slip: f64, omega: f64, target: f64) -> String {
+    let raised = round_up(slip * omega / target);
+    format!(
+        "raise {key} to ≥ {} m/s (the rate falls as 1/slip_velocity: ÷ {})",
+        num(raised),
+        num(raised / slip)
+    )
 }
