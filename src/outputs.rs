@@ -40,6 +40,10 @@ pub enum Quantity {
     TerrainForce(usize, usize),
     /// Contact points pushing on terrain shape k.
     TerrainContacts(usize),
+    /// Pairs of bars pushing on each other.
+    Collisions,
+    /// The deepest interpenetration of two bars' capsules, m.
+    CollisionPenetration,
 }
 
 /// One named output.
@@ -70,7 +74,9 @@ impl Quantity {
             Self::ContactForce(_)
             | Self::GroundForce(_)
             | Self::TerrainForce(..)
-            | Self::TerrainContacts(_) => OutputGroup::Contact,
+            | Self::TerrainContacts(_)
+            | Self::Collisions
+            | Self::CollisionPenetration => OutputGroup::Contact,
             Self::SupportReaction(..) => OutputGroup::Reactions,
         }
     }
@@ -100,6 +106,8 @@ impl Quantity {
             Self::SupportReaction(k, axis) => sim.support_reaction(k)[axis],
             Self::TerrainForce(k, axis) => sim.shape_load(k).force[axis],
             Self::TerrainContacts(k) => f64::from(sim.shape_load(k).contacts),
+            Self::Collisions => f64::from(sim.workspace().collision.contacts),
+            Self::CollisionPenetration => sim.workspace().collision.max_penetration,
         }
     }
 }
@@ -271,6 +279,21 @@ fn all_outputs(sim: &Simulation) -> Vec<Output> {
             quantity: Quantity::TerrainContacts(k),
         });
     }
+    if model.collisions.is_some() {
+        out.push(Output {
+            name: "collisions.contacts".into(),
+            unit: "1",
+            description: "number of pairs of bars pushing on each other".into(),
+            quantity: Quantity::Collisions,
+        });
+        out.push(Output {
+            name: "collisions.max_penetration".into(),
+            unit: "m",
+            description: "deepest interpenetration of two bars' capsules (0 without contact)"
+                .into(),
+            quantity: Quantity::CollisionPenetration,
+        });
+    }
     out
 }
 
@@ -285,6 +308,9 @@ fn energy_terms(model: &crate::model::Model) -> String {
     }
     if model.terrain.is_some() {
         terms.push("terrain penalty");
+    }
+    if model.collisions.is_some() {
+        terms.push("collision penalty");
     }
     format!("{} energy", terms.join(" + "))
 }

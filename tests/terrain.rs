@@ -208,11 +208,19 @@ fn a_too_long_step_names_the_terrain_contact_that_limits_it() {
     let text = bar_scene([-0.5, 0.0, 0.6], [0.5, 0.0, 0.6], 1.0, 0.05, &stiff)
         + "[solver]\nmethod = \"rk4\"\nstep_size = 1e-3\n";
     let mut s = sim(&text);
-    let problem = s.stability_problem().expect("1 ms is far too long for 1e9 N/m");
+    let problem = s
+        .stability_problem()
+        .expect("1 ms is far too long for 1e9 N/m");
     println!("{problem}");
     // √(k w) with the end compliance w = 4/m of a 1 kg rod: 6.3e4 1/s; rk4's limit 2.83.
     assert!(problem.contains("ω ≈ 6.325e4 1/s"), "{problem}");
-    assert!(problem.contains("terrain[1].stiffness = 1e9 N/m"), "{problem}");
+    assert!(
+        problem.contains("terrain[1].stiffness = 1e9 N/m"),
+        "{problem}"
+    );
     // 10 % inside the limit: (0.9 · 2.828 / 1 ms)² / w = 1.62e6 N/m.
-    assert!(problem.contains("terrain[1].stiffness ≤ 1.62e6 N/m"), "{problem}");
+    assert!(
+        problem.contains("terrain[1].stiffness ≤ 1.62e6 N/m"),
+        "{problem}"
+    );
 }

@@ -378,6 +378,7 @@ fn pipeline_names(pipeline: &Pipeline) -> String {
         ForceEffect::ScriptedLoads(v) => format!("ScriptedLoads({})", v.len()),
         ForceEffect::GroundContact(g) => format!("GroundContact({})", g.nodes.len()),
         ForceEffect::Terrain(t) => format!("Terrain({}×{})", t.capsules.len(), t.shapes.len()),
+        ForceEffect::Collisions(c) => format!("Collisions({})", c.capsules.len()),
     });
     let constraints = pipeline.constraints.iter().map(|c| match c {
         ConstraintEffect::JointsAndPins => "JointsAndPins".to_string(),

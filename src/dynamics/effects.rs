@@ -4,6 +4,7 @@
 
 use nalgebra::Vector3;
 
+use super::collisions::CollisionScratch;
 use super::terrain::{ShapeLoad, TerrainSink};
 use super::{Inputs, Workspace};
 pub use crate::model::effects::{CableLink, ConstraintEffect, ForceEffect, Pipeline, Target};
@@ -18,6 +19,7 @@ pub fn applied_forces(model: &Model, inputs: &Inputs, t: f64, ws: &mut Workspace
         gamma: &mut ws.gamma,
         contact_force: &mut ws.contact_force,
         shape_load: &mut ws.shape_load,
+        collision: &mut ws.collision,
     };
     let nodes = (ws.node_pos.as_slice(), ws.node_vel.as_slice());
     apply(&model.pipeline.forces, inputs, t, nodes, &mut sink);
@@ -34,6 +36,8 @@ pub(super) trait ForceSink {
     fn contact(&mut self, k: usize, f: Vector3<f64>);
     /// The terrain shapes' loads, to fill.
     fn shape_loads(&mut self) -> &mut [ShapeLoad];
+    /// The broad phase's buffers and the collisions found.
+    fn collision(&mut self) -> &mut CollisionScratch;
 }
 
 /// The whole of each output.
@@ -42,6 +46,7 @@ pub(super) struct Slices<'a> {
     pub gamma: &'a mut [f64],
     pub contact_force: &'a mut [Vector3<f64>],
     pub shape_load: &'a mut [ShapeLoad],
+    pub collision: &'a mut CollisionScratch,
 }
 
 impl ForceSink for Slices<'_> {
@@ -59,6 +64,9 @@ impl ForceSink for Slices<'_> {
     }
     fn shape_loads(&mut self) -> &mut [ShapeLoad] {
         self.shape_load
+    }
+    fn collision(&mut self) -> &mut CollisionScratch {
+        self.collision
     }
 }
 
@@ -140,6 +148,12 @@ pub(super) fn apply(
             ForceEffect::Terrain(terrain) => {
                 sink.shape_loads().fill(ShapeLoad::default());
                 super::terrain::apply(terrain, nodes, &mut IntoSink(sink));
+            }
+            ForceEffect::Collisions(collisions) => {
+                // The scratch is taken out while the sink receives the forces.
+                let mut scratch = std::mem::take(sink.collision());
+                super::collisions::apply(collisions, nodes, &mut scratch, |e, f| sink.add(e, f));
+                *sink.collision() = scratch;
             }
         }
     }
@@ -312,6 +326,7 @@ mod tests {
             gamma: &mut gamma,
             contact_force: &mut [],
             shape_load: &mut [],
+            collision: &mut CollisionScratch::default(),
         };
         elastic_cables(&cables, &x, &mut sink);
 

@@ -61,6 +61,10 @@ pub fn potential(model: &Model, inputs: &Inputs, ws: &Workspace) -> f64 {
     if let Some(terrain) = &model.terrain {
         v += super::terrain::energy(terrain, &ws.node_pos);
     }
+    if let Some(c) = &model.collisions {
+        let mut scratch = super::collisions::CollisionScratch::new(c.capsules.len());
+        v += super::collisions::energy(c, &ws.node_pos, &mut scratch);
+    }
     v
 }
 

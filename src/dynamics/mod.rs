@@ -7,6 +7,7 @@
 //! from `N̈ P = 0`; it is a stage only when the scene has pins or joints.
 
 mod bar_response;
+pub mod collisions;
 pub mod effects;
 pub mod energy;
 pub mod parallel;
@@ -92,6 +93,8 @@ pub struct Workspace {
     pub contact_force: Vec<Vector3<f64>>,
     /// Each terrain shape's total force and contact count.
     pub shape_load: Vec<terrain::ShapeLoad>,
+    /// The collision broad phase's buffers and what it found.
+    pub collision: collisions::CollisionScratch,
     /// Per bar, what the second λ pass needs, and `b` and `1/|b|²` for K's assembly after
     /// the first (K's bundles, deferred blocks, again after a failed factor).
     bars: Vec<BarKept>,
@@ -168,6 +171,9 @@ impl Workspace {
                 terrain::ShapeLoad::default();
                 model.terrain.as_ref().map_or(0, |t| t.shapes.len())
             ],
+            collision: collisions::CollisionScratch::new(
+                model.collisions.as_ref().map_or(0, |c| c.capsules.len()),
+            ),
             bars: vec![(Vector3::zeros(), 0.0, 1.0, 1.0); model.bars.len()],
             reactions: model.reactions.clone(),
             dense_fallbacks: 0,

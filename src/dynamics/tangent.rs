@@ -301,6 +301,31 @@ impl EndDerivatives {
                     }
                 }
             }
+            ForceEffect::Collisions(c) => {
+                let nodes = (ws.node_pos.as_slice(), ws.node_vel.as_slice());
+                let mut scratch = super::collisions::CollisionScratch::new(c.capsules.len());
+                let mut touching = Vec::new();
+                super::collisions::for_each_contact(c, nodes, &mut scratch, |i, j, _, _, _, _| {
+                    touching.push((i, j));
+                });
+                for (i, j) in touching {
+                    let pair = [&c.capsules[i], &c.capsules[j]];
+                    let at = |k: usize| pair[k / 2].nodes[k % 2];
+                    let x = [0, 1, 2, 3].map(|k| ws.node_pos[at(k)]);
+                    let v = [0, 1, 2, 3].map(|k| ws.node_vel[at(k)]);
+                    let d = super::collisions::pair_derivatives(c, pair, x, v);
+                    let ends = [0, 1, 2, 3].map(|k| pair[k / 2].ends[k % 2]);
+                    for (m, blocks) in [(&mut self.position, &d[0]), (&mut self.velocity, &d[1])] {
+                        for (row, row_blocks) in ends.iter().zip(blocks) {
+                            for (col, block) in ends.iter().zip(row_blocks) {
+                                if let (Some(r), Some(c)) = (row, col) {
+                                    add_block(m, *r, *c, block);
+                                }
+                            }
+                        }
+                    }
+                }
+            }
             ForceEffect::Gravity(_)
             | ForceEffect::NodeForces(_)
             | ForceEffect::ScriptedLoads(_) => {}

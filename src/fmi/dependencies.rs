@@ -21,7 +21,7 @@
 
 use fmi2_model_description::{Causality, DependencyKind, Unknown};
 
-use super::variables::{Binding, GroundField, TerrainField, VariableTable};
+use super::variables::{Binding, ContactField, GroundField, VariableTable};
 use crate::model::coords::End;
 use crate::model::Model;
 use crate::outputs::Quantity;
@@ -45,6 +45,8 @@ struct Footprint {
     terrain_force: bool,
     /// It enters which points touch the terrain.
     terrain_touch: bool,
+    /// It enters which bars touch each other.
+    collision_touch: bool,
 }
 
 /// A row of `<InitialUnknowns>` that reads every input and more than this many parameters
@@ -101,6 +103,7 @@ struct Readers {
     contact_total: Reads,
     terrain_force: Reads,
     terrain_touch: Reads,
+    collision_touch: Reads,
 }
 
 /// `<Outputs>` and `<InitialUnknowns>` with their dependencies (1-based table indices), in
@@ -160,6 +163,7 @@ pub fn model_structure(model: &Model, table: &VariableTable) -> (Vec<Unknown>, V
             Quantity::GroundForce(_) => &readers.contact_total,
             Quantity::TerrainForce(..) => &readers.terrain_force,
             Quantity::TerrainContacts(_) => &readers.terrain_touch,
+            Quantity::Collisions | Quantity::CollisionPenetration => &readers.collision_touch,
         };
         outputs.push(outputs_row(i, reads, n_inputs));
         initial.push(initial_row(i, reads, n_inputs, n_parameters));
@@ -265,6 +269,7 @@ fn readers(model: &Model, table: &VariableTable, groups: &[usize]) -> Readers {
             (f.contact_total, &mut r.contact_total),
             (f.terrain_force, &mut r.terrain_force),
             (f.terrain_touch, &mut r.terrain_touch),
+            (f.collision_touch, &mut r.collision_touch),
         ] {
             if flag {
                 reads.push(index, c);
@@ -378,6 +383,7 @@ fn footprint(model: &Model, binding: Binding) -> Footprint {
                 contact_total: grounded,
                 terrain_force: model.terrain.is_some(),
                 terrain_touch: model.terrain.is_some(),
+                collision_touch: model.collisions.is_some(),
                 ..Footprint::default()
             }
         }
@@ -388,8 +394,13 @@ fn footprint(model: &Model, binding: Binding) -> Footprint {
                     .flat_map(|c| c.ends.into_iter().flatten())
                     .collect()
             }),
-            energy: field == TerrainField::Stiffness,
+            energy: field == ContactField::Stiffness,
             terrain_force: true,
+            ..Footprint::default()
+        },
+        Binding::Collision(field) => Footprint {
+            ends: (0..model.coords.n_ends()).collect(),
+            energy: field == ContactField::Stiffness,
             ..Footprint::default()
         },
         Binding::Output(_)

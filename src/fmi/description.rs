@@ -76,7 +76,8 @@ fn bounds(v: &Variable) -> (Option<f64>, Option<f64>) {
         | Binding::PointMass(_)
         | Binding::Ground(_)
         | Binding::Radius(_)
-        | Binding::Terrain(..) => (Some(0.0), None),
+        | Binding::Terrain(..)
+        | Binding::Collision(_) => (Some(0.0), None),
         _ => (None, None),
     }
 }

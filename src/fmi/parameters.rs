@@ -2,10 +2,10 @@
 //! parameter binding, so get, set and FMU-state restore share one mapping, and one check
 //! of a parameter's value.
 
-use super::variables::{BaseType, Binding, GroundField, LoadField, TerrainField, Variable};
+use super::variables::{BaseType, Binding, ContactField, GroundField, LoadField, Variable};
 use crate::integrator::Method;
 use crate::numbers::shortest;
-use crate::scene::{GroundSpec, LoadSpec, Scene, TerrainSpec};
+use crate::scene::{CollisionSpec, GroundSpec, LoadSpec, Scene, TerrainSpec};
 
 /// The scene value behind a parameter binding (0 for a non-parameter binding).
 pub(super) fn read_parameter(scene: &Scene, binding: Binding) -> f64 {
@@ -34,6 +34,10 @@ pub(super) fn read_parameter(scene: &Scene, binding: Binding) -> f64 {
         }
         Binding::Radius(i) => scene.bars[i].radius,
         Binding::Terrain(k, field) => *terrain_field(&mut scene.terrain[k].clone(), field),
+        Binding::Collision(field) => scene
+            .collisions
+            .clone()
+            .map_or(0.0, |mut c| *collision_field(&mut c, field)),
         Binding::Output(_)
         | Binding::ForceDensity(_)
         | Binding::NodeForce(..)
@@ -106,6 +110,11 @@ pub(super) fn apply_parameter(scene: &mut Scene, binding: Binding, value: f64) {
         }
         Binding::Radius(i) => scene.bars[i].radius = value,
         Binding::Terrain(k, field) => *terrain_field(&mut scene.terrain[k], field) = value,
+        Binding::Collision(field) => {
+            if let Some(c) = &mut scene.collisions {
+                *collision_field(c, field) = value;
+            }
+        }
         Binding::Output(_)
         | Binding::ForceDensity(_)
         | Binding::NodeForce(..)
@@ -143,11 +152,21 @@ fn ground_field(g: &mut GroundSpec, field: GroundField) -> &mut f64 {
 }
 
 /// The scene value behind a terrain parameter.
-fn terrain_field(t: &mut TerrainSpec, field: TerrainField) -> &mut f64 {
+fn terrain_field(t: &mut TerrainSpec, field: ContactField) -> &mut f64 {
     match field {
-        TerrainField::Stiffness => &mut t.stiffness,
-        TerrainField::Damping => &mut t.damping,
-        TerrainField::Friction => &mut t.friction,
-        TerrainField::SlipVelocity => &mut t.slip_velocity,
+        ContactField::Stiffness => &mut t.stiffness,
+        ContactField::Damping => &mut t.damping,
+        ContactField::Friction => &mut t.friction,
+        ContactField::SlipVelocity => &mut t.slip_velocity,
+    }
+}
+
+/// The scene value behind a bar–bar contact parameter.
+fn collision_field(c: &mut CollisionSpec, field: ContactField) -> &mut f64 {
+    match field {
+        ContactField::Stiffness => &mut c.stiffness,
+        ContactField::Damping => &mut c.damping,
+        ContactField::Friction => &mut c.friction,
+        ContactField::SlipVelocity => &mut c.slip_velocity,
     }
 }

@@ -5,7 +5,7 @@
 use nalgebra::Vector3;
 
 use super::contact::Ground;
-use super::terrain::Terrain;
+use super::terrain::{Collisions, Terrain};
 use super::{CableLaw, Model};
 use crate::scene::LoadSpec;
 
@@ -44,6 +44,8 @@ pub enum ForceEffect {
     GroundContact(Ground),
     /// Bars' capsules against terrain shapes, along their length.
     Terrain(Box<Terrain>),
+    /// Bars' capsules against each other.
+    Collisions(Box<Collisions>),
 }
 
 /// A constraint contribution beyond the bars' own length constraints.
@@ -147,6 +149,9 @@ impl Pipeline {
         }
         if let Some(terrain) = &model.terrain {
             push(ForceEffect::Terrain(Box::new(terrain.clone())), true);
+        }
+        if let Some(collisions) = &model.collisions {
+            push(ForceEffect::Collisions(Box::new(collisions.clone())), true);
         }
         let constraints = if model.reactions.size() > 0 {
             vec![ConstraintEffect::JointsAndPins]

@@ -13,6 +13,7 @@ pub mod terrain;
 
 use nalgebra::Vector3;
 
+use crate::contact::Penalty;
 use crate::error::SceneError;
 use crate::scene::{CableControl, LoadSpec, Scene, SolverSpec};
 use contact::Ground;
@@ -23,7 +24,7 @@ use effects::Pipeline;
 use inertia::{BarInertia, InertiaLanes};
 use reactions::Reactions;
 use supports::Support;
-use terrain::{Capsule, Terrain};
+use terrain::{Capsule, Collisions, Terrain};
 
 /// A rigid bar between physical nodes (0-based).
 #[derive(Debug, Clone, PartialEq)]
@@ -104,6 +105,8 @@ pub struct Model {
     pub ground: Option<Ground>,
     /// Terrain shapes and the bars' capsules, if the scene has terrain.
     pub terrain: Option<Terrain>,
+    /// Bar–bar contact, if the scene asks for it.
+    pub collisions: Option<Collisions>,
     /// How to read the support reaction of each pinned node.
     pub supports: Vec<Support>,
     /// The force contributions of the declared effects, run by every evaluation.
@@ -225,19 +228,28 @@ impl Model {
             let radii = contacts.iter().map(|&(n, _)| node_radius[n]).collect();
             Ground::new(spec, contacts, radii)
         });
+        let capsules: Vec<Capsule> = bars
+            .iter()
+            .enumerate()
+            .map(|(i, b)| Capsule {
+                bar: i,
+                nodes: b.nodes,
+                ends: b.nodes.map(|n| coords.node_end[n]),
+                radius: b.radius,
+            })
+            .collect();
         let terrain = (!scene.terrain.is_empty()).then(|| {
-            let capsules = bars
-                .iter()
-                .enumerate()
-                .filter(|&(i, _)| !coords.static_bar[i])
-                .map(|(i, b)| Capsule {
-                    bar: i,
-                    nodes: b.nodes,
-                    ends: b.nodes.map(|n| coords.node_end[n]),
-                    radius: b.radius,
-                })
-                .collect();
-            Terrain::new(&scene.terrain, capsules)
+            let moving = capsules.iter().filter(|c| !coords.static_bar[c.bar]);
+            Terrain::new(&scene.terrain, moving.copied().collect())
+        });
+        let collisions = scene.collisions.as_ref().map(|c| Collisions {
+            law: Penalty {
+                stiffness: c.stiffness,
+                damping: c.damping,
+                friction: c.friction,
+                slip_velocity: c.slip_velocity,
+            },
+            capsules,
         });
         let mut reactions = Reactions::new(&coords, &inertia, basis == BasisKind::Dense);
         let units: Vec<Vector3<f64>> = bars
@@ -270,6 +282,7 @@ impl Model {
             inertia,
             ground,
             terrain,
+            collisions,
             supports,
             pipeline: Pipeline::default(),
             force_inputs: scene.force_inputs.iter().map(|&n| n - 1).collect(),

@@ -65,3 +65,12 @@ pub fn shape(t: &TerrainSpec) -> Shape {
         )),
     }
 }
+
+/// Bar–bar contact: every bar's capsule against every other that shares no node with it.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Collisions {
+    /// The contact law of every pair.
+    pub law: Penalty,
+    /// Every bar's capsule, in bar order (static bars too: moving bars hit them).
+    pub capsules: Vec<Capsule>,
+}

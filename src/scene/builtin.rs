@@ -125,6 +125,7 @@ pub fn tower_scene(stages: usize, stiffness: Option<f64>, name: &str) -> Scene {
         point_masses: Vec::new(),
         ground: None,
         terrain: Vec::new(),
+        collisions: None,
         outputs: None,
         prestress: Some(PrestressSpec {
             min_tension: PRESTRESS_TENSION,
@@ -204,6 +205,7 @@ fn icosahedron() -> Scene {
         point_masses: Vec::new(),
         ground: None,
         terrain: Vec::new(),
+        collisions: None,
         outputs: None,
         prestress: Some(PrestressSpec {
             min_tension: PRESTRESS_TENSION,

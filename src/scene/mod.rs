@@ -15,7 +15,7 @@ pub use builtin::{
     BUILTIN_DEFAULT,
 };
 pub use extreme::{extreme_scenes, Extreme};
-pub use terrain::{TerrainKind, TerrainSpec, MAX_HEIGHTS};
+pub use terrain::{CollisionSpec, TerrainKind, TerrainSpec, MAX_HEIGHTS};
 
 use serde::{Deserialize, Serialize};
 use std::path::Path;
@@ -66,6 +66,9 @@ pub struct Scene {
     /// Planes, boxes and heightfields the bars touch along their length.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub terrain: Vec<TerrainSpec>,
+    /// Contact between bars that share no node; absent means bars pass through each other.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub collisions: Option<CollisionSpec>,
     /// Equilibrium prestress: derive rest lengths / start force densities from a self-stress.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub prestress: Option<PrestressSpec>,

@@ -180,24 +180,15 @@ impl TerrainSpec {
             }
             TerrainKind::Heightfield => self.validate_grid(key)?,
         }
-        for (name, v, positive) in [
-            ("stiffness", self.stiffness, true),
-            ("damping", self.damping, false),
-            ("friction", self.friction, false),
-            ("slip_velocity", self.slip_velocity, true),
-        ] {
-            finite(&format!("{key}.{name}"), v)?;
-            if v < 0.0 || (positive && v == 0.0) {
-                return Err(SceneError::invalid(
-                    format!("{key}.{name}"),
-                    format!(
-                        "must be {}, got {v}",
-                        if positive { "positive" } else { "≥ 0" }
-                    ),
-                ));
-            }
-        }
-        Ok(())
+        contact_law(
+            key,
+            [
+                self.stiffness,
+                self.damping,
+                self.friction,
+                self.slip_velocity,
+            ],
+        )
     }
 
     fn validate_grid(&self, key: &str) -> Result<(), SceneError> {
@@ -298,4 +289,54 @@ fn parse_heights(text: &str) -> Result<Vec<Vec<f64>>, String> {
         rows.push(row);
     }
     Ok(rows)
+}
+
+/// Contact between the capsules of any two bars that share no node.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CollisionSpec {
+    /// Penalty stiffness, N/m.
+    pub stiffness: f64,
+    /// Penalty damping on the normal approach speed, N·s/m.
+    #[serde(default)]
+    pub damping: f64,
+    /// Coulomb friction coefficient μ.
+    #[serde(default)]
+    pub friction: f64,
+    /// Tangential speed below which friction is viscous (regularised Coulomb), m/s.
+    #[serde(default = "default_slip_velocity")]
+    pub slip_velocity: f64,
+}
+
+impl CollisionSpec {
+    /// Checks the settings.
+    pub fn validate(&self) -> Result<(), SceneError> {
+        contact_law(
+            "collisions",
+            [
+                self.stiffness,
+                self.damping,
+                self.friction,
+                self.slip_velocity,
+            ],
+        )
+    }
+}
+
+/// Checks `[stiffness, damping, friction, slip_velocity]` under `key`.
+fn contact_law(key: &str, values: [f64; 4]) -> Result<(), SceneError> {
+    let names = ["stiffness", "damping", "friction", "slip_velocity"];
+    for ((name, v), positive) in names.iter().zip(values).zip([true, false, false, true]) {
+        finite(&format!("{key}.{name}"), v)?;
+        if v < 0.0 || (positive && v == 0.0) {
+            return Err(SceneError::invalid(
+                format!("{key}.{name}"),
+                format!(
+                    "must be {}, got {v}",
+                    if positive { "positive" } else { "≥ 0" }
+                ),
+            ));
+        }
+    }
+    Ok(())
 }

@@ -198,6 +198,9 @@ pub(super) fn validate(scene: &Scene) -> Result<(), SceneError> {
     for (i, t) in scene.terrain.iter().enumerate() {
         t.validate(&format!("terrain[{}]", i + 1))?;
     }
+    if let Some(c) = &scene.collisions {
+        c.validate()?;
+    }
     super::limits::check(scene)?;
     if let Some(vs) = &scene.velocities {
         if vs.len() != n {

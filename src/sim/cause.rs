@@ -36,6 +36,10 @@ pub enum Cause {
     TerrainPenalty(usize),
     /// Terrain shape k's friction, viscous below its slip velocity, as the ground's.
     TerrainFriction(usize),
+    /// Bar–bar contact's penalty oscillator, as the ground's.
+    CollisionPenalty,
+    /// Bar–bar friction, viscous below its slip velocity, as the ground's.
+    CollisionFriction,
     /// The structure's fastest mode with no cable or contact dominating its stiffness
     /// (bars' constraint forces, many comparable terms).
     Structure,
@@ -87,20 +91,56 @@ pub fn contact_rates(model: &Model) -> Vec<Rate> {
     };
     if let Some(ground) = &model.ground {
         let (w, node) = contact_compliance(model);
-        push(ground.penalty(), w, node, [Cause::GroundPenalty, Cause::Friction]);
+        push(
+            ground.penalty(),
+            w,
+            node,
+            [Cause::GroundPenalty, Cause::Friction],
+        );
     }
     if model.terrain.is_some() {
         let (w, node) = terrain_compliance(model);
         for (k, law) in terrain_laws(model).enumerate() {
-            push(law, w, node, [Cause::TerrainPenalty(k), Cause::TerrainFriction(k)]);
+            push(
+                law,
+                w,
+                node,
+                [Cause::TerrainPenalty(k), Cause::TerrainFriction(k)],
+            );
         }
+    }
+    if let Some(c) = &model.collisions {
+        let (w, node) = collision_compliance(model);
+        push(
+            c.law,
+            w,
+            node,
+            [Cause::CollisionPenalty, Cause::CollisionFriction],
+        );
     }
     rates
 }
 
+/// The largest end compliance of any moving bar, 1/kg, and its node: two bars that touch
+/// move apart with at most twice it.
+fn collision_compliance(model: &Model) -> (f64, Option<usize>) {
+    (0..model.coords.n_ends())
+        .filter(|&e| !model.coords.static_bar[e / 2])
+        .map(|e| {
+            (
+                2.0 * model.inertia[e / 2].w[e % 2][e % 2],
+                Some(model.coords.end_node[e]),
+            )
+        })
+        .fold((0.0, None), |best, c| if c.0 > best.0 { c } else { best })
+}
+
 /// The terrain shapes' contact laws, in scene order.
 fn terrain_laws(model: &Model) -> impl Iterator<Item = Penalty> + '_ {
-    model.terrain.iter().flat_map(|t| t.shapes.iter().map(|(_, law)| *law))
+    model
+        .terrain
+        .iter()
+        .flat_map(|t| t.shapes.iter().map(|(_, law)| *law))
 }
 
 /// The largest end compliance among the bars that touch terrain, 1/kg, and its node: a
@@ -259,6 +299,30 @@ impl Rate {
                     k1 = k + 1
                 )
             }
+            Cause::CollisionPenalty => {
+                let law = model.collisions.as_ref().expect("collisions").law;
+                format!(
+                    "the contact penalty between bars, collisions.stiffness = {} N/m with \
+                     collisions.damping = {} N·s/m (rate √(k w) + c w, with the compliance \
+                     w = {} 1/kg of two bar ends, {at} among them)",
+                    num(law.stiffness),
+                    num(law.damping),
+                    num(collision_compliance(model).0),
+                )
+            }
+            Cause::CollisionFriction => {
+                let law = model.collisions.as_ref().expect("collisions").law;
+                format!(
+                    "the friction between bars, collisions.friction = {} with \
+                     collisions.slip_velocity = {} m/s (below the slip velocity friction is \
+                     viscous: rate μ W w / slip_velocity, with the weight W = {} N and the \
+                     compliance w = {} 1/kg of two bar ends, {at} among them)",
+                    num(law.friction),
+                    num(law.slip_velocity),
+                    num(weight(model)),
+                    num(collision_compliance(model).0),
+                )
+            }
             Cause::Structure => format!(
                 "the structure's fastest mode, which no single cable or contact dominates (it \
                  moves {at} most)"
@@ -313,17 +377,37 @@ impl Rate {
             }
             Cause::Friction => {
                 let g = model.ground.as_ref()?;
-                Some(raise_slip("ground.slip_velocity", g.slip_velocity, self.omega, target))
+                Some(raise_slip(
+                    "ground.slip_velocity",
+                    g.slip_velocity,
+                    self.omega,
+                    target,
+                ))
             }
             Cause::TerrainPenalty(k) => {
                 let law = terrain_laws(model).nth(*k)?;
                 let w = terrain_compliance(model).0;
-                Some(soften_penalty(&format!("terrain[{}]", k + 1), law, w, target))
+                Some(soften_penalty(
+                    &format!("terrain[{}]", k + 1),
+                    law,
+                    w,
+                    target,
+                ))
             }
             Cause::TerrainFriction(k) => {
                 let law = terrain_laws(model).nth(*k)?;
                 let key = format!("terrain[{}].slip_velocity", k + 1);
                 Some(raise_slip(&key, law.slip_velocity, self.omega, target))
+            }
+            Cause::CollisionPenalty => {
+                let law = model.collisions.as_ref()?.law;
+                let w = collision_compliance(model).0;
+                Some(soften_penalty("collisions", law, w, target))
+            }
+            Cause::CollisionFriction => {
+                let law = model.collisions.as_ref()?.law;
+                let key = "collisions.slip_velocity";
+                Some(raise_slip(key, law.slip_velocity, self.omega, target))
             }
             Cause::CableDamping(j) => Some(format!(
                 "cables[{}].damping ≤ {} N·s/m",

@@ -169,6 +169,9 @@ impl Events {
                         }
                     }
                 }
+                // Collision onsets are not located: a switch per pair would grow with the
+                // square of the bars (see docs/contact.md).
+                ForceEffect::Collisions(_) => {}
                 ForceEffect::ForceDensityCables(_)
                 | ForceEffect::NodeForces(_)
                 | ForceEffect::ScriptedLoads(_)

@@ -172,9 +172,12 @@ impl Simulation {
         let rates = self.fastest_rates();
         // Friction's regularisation is a decay, not an oscillation: a step need not follow
         // it, only stay stable (the stability guard's part).
-        let fastest = rates
-            .iter()
-            .find(|r| !matches!(r.cause, Cause::Friction | Cause::TerrainFriction(_)))?;
+        let fastest = rates.iter().find(|r| {
+            !matches!(
+                r.cause,
+                Cause::Friction | Cause::TerrainFriction(_) | Cause::CollisionFriction
+            )
+        })?;
         let hw = h * fastest.omega;
         // Above the limit the stability guard refuses the step instead.
         if hw <= RESOLVED_STEP_PER_TIME_SCALE || h * rates[0].omega > limit {

@@ -132,6 +132,7 @@ pub fn random_scene(seed: u64) -> Scene {
         point_masses: Vec::new(),
         ground: None,
         terrain: Vec::new(),
+        collisions: None,
         outputs: None,
         prestress: None,
         start: Default::default(),

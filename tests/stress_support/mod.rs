@@ -206,6 +206,7 @@ pub fn bare(name: &str, nodes: Vec<[f64; 3]>, fixed: Vec<usize>) -> Scene {
         point_masses: Vec::new(),
         ground: None,
         terrain: Vec::new(),
+        collisions: None,
         outputs: None,
         prestress: None,
         start: Default::default(),

@@ -133,13 +133,22 @@ fn split_forces(
 ) -> Option<([Vec<ForceEffect>; 2], Vec<ForceEffect>)> {
     let serial_from = effects
         .iter()
-        .position(|e| matches!(e, ForceEffect::GroundContact(_) | ForceEffect::Terrain(_)))
+        .position(|e| {
+            matches!(
+                e,
+                ForceEffect::GroundContact(_)
+                    | ForceEffect::Terrain(_)
+                    | ForceEffect::Collisions(_)
+            )
+        })
         .unwrap_or(effects.len());
     let after = effects[serial_from..].to_vec();
-    if after
-        .iter()
-        .any(|e| !matches!(e, ForceEffect::GroundContact(_) | ForceEffect::Terrain(_)))
-    {
+    if after.iter().any(|e| {
+        !matches!(
+            e,
+            ForceEffect::GroundContact(_) | ForceEffect::Terrain(_) | ForceEffect::Collisions(_)
+        )
+    }) {
         return None;
     }
     let part = |t: usize| -> Vec<ForceEffect> {
@@ -192,7 +201,9 @@ fn split_forces(
                 ForceEffect::Gravity(w) => ForceEffect::Gravity(
                     w.iter().filter(|(e, _)| owner(*e) == t).copied().collect(),
                 ),
-                ForceEffect::GroundContact(_) | ForceEffect::Terrain(_) => {
+                ForceEffect::GroundContact(_)
+                | ForceEffect::Terrain(_)
+                | ForceEffect::Collisions(_) => {
                     unreachable!("applied after the halves")
                 }
             })

@@ -89,6 +89,9 @@ impl ForceSink for HalfSink {
     fn shape_loads(&mut self) -> &mut [super::terrain::ShapeLoad] {
         unreachable!("terrain contact is applied after the halves")
     }
+    fn collision(&mut self) -> &mut super::collisions::CollisionScratch {
+        unreachable!("collisions are applied after the halves")
+    }
 }
 
 /// [`super::evaluate`] on two threads (the sparse basis, see [`Halves::new`]): this one and
@@ -159,6 +162,7 @@ pub(super) fn evaluate(
                     gamma: &mut ws.gamma,
                     contact_force: &mut ws.contact_force,
                     shape_load: &mut ws.shape_load,
+                    collision: &mut ws.collision,
                 };
                 effects::apply(&halves.after, inputs, t, nodes, &mut sink);
             }

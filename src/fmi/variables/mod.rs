@@ -60,12 +60,14 @@ pub enum Binding {
     /// Radius of bar `i`'s capsule.
     Radius(usize),
     /// A contact setting of terrain shape `k`.
-    Terrain(usize, TerrainField),
+    Terrain(usize, ContactField),
+    /// A setting of bar–bar contact.
+    Collision(ContactField),
 }
 
-/// The contact settings of a terrain shape exposed as parameters.
+/// The contact settings of a terrain shape or of bar–bar contact exposed as parameters.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum TerrainField {
+pub enum ContactField {
     /// `terrain[k].stiffness`.
     Stiffness,
     /// `terrain[k].damping`.

@@ -3,7 +3,7 @@
 
 use fmi2_model_description::{Causality, Initial, Variability};
 
-use super::{is_tunable, BaseType, Binding, GroundField, LoadField, TerrainField, Variable, AXES};
+use super::{is_tunable, BaseType, Binding, ContactField, GroundField, LoadField, Variable, AXES};
 use crate::model::{CableLaw, Model};
 use crate::scene::LoadSpec;
 
@@ -229,46 +229,61 @@ pub(super) fn effect_parameters(model: &Model, vars: &mut Vec<Variable>) {
         load_parameters(k, load, vars);
     }
     for (k, t) in scene.terrain.iter().enumerate() {
-        let shape = format!("terrain[{}] ({})", k + 1, t.kind.name());
-        let fields = [
-            (
-                TerrainField::Stiffness,
-                "stiffness",
-                Some("N/m"),
-                "penalty stiffness of contact",
-                t.stiffness,
-            ),
-            (
-                TerrainField::Damping,
-                "damping",
-                Some("N.s/m"),
-                "penalty damping on the normal approach speed",
-                t.damping,
-            ),
-            (
-                TerrainField::Friction,
-                "friction",
-                None,
-                "Coulomb friction coefficient",
-                t.friction,
-            ),
-            (
-                TerrainField::SlipVelocity,
-                "slip_velocity",
-                Some("m/s"),
-                "tangential speed below which friction is viscous (regularised Coulomb)",
-                t.slip_velocity,
-            ),
-        ];
-        for (field, name, unit, description, value) in fields {
-            vars.push(parameter(
-                format!("terrain[{}].{name}", k + 1),
-                unit,
-                format!("{shape}: {description}"),
-                value,
-                Binding::Terrain(k, field),
-            ));
-        }
+        let values = [t.stiffness, t.damping, t.friction, t.slip_velocity];
+        let what = format!("terrain[{}] ({})", k + 1, t.kind.name());
+        let key = format!("terrain[{}]", k + 1);
+        contact_parameters(&key, &what, values, |f| Binding::Terrain(k, f), vars);
+    }
+    if let Some(c) = &scene.collisions {
+        let values = [c.stiffness, c.damping, c.friction, c.slip_velocity];
+        let what = "contact between bars";
+        contact_parameters("collisions", what, values, Binding::Collision, vars);
+    }
+}
+
+/// The four settings of a contact law under `key`: `[stiffness, damping, friction,
+/// slip_velocity]`.
+fn contact_parameters(
+    key: &str,
+    what: &str,
+    values: [f64; 4],
+    binding: impl Fn(ContactField) -> Binding,
+    vars: &mut Vec<Variable>,
+) {
+    let fields = [
+        (
+            ContactField::Stiffness,
+            "stiffness",
+            Some("N/m"),
+            "penalty stiffness",
+        ),
+        (
+            ContactField::Damping,
+            "damping",
+            Some("N.s/m"),
+            "penalty damping on the normal approach speed",
+        ),
+        (
+            ContactField::Friction,
+            "friction",
+            None,
+            "Coulomb friction coefficient",
+        ),
+        (
+            ContactField::SlipVelocity,
+            "slip_velocity",
+            Some("m/s"),
+            "tangential speed below which friction is viscous (regularised Coulomb)",
+        ),
+    ];
+    for ((field, name, unit, description), value) in fields.into_iter().zip(values) {
+        vars.push(parameter(
+            format!("{key}.{name}"),
+            unit,
+            format!("{what}: {description}"),
+            value,
+            binding(field),
+        ));
     }
 }
 
