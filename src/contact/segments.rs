@@ -32,7 +32,7 @@ pub fn closest_params(
         }
     };
     let mut t = (b * s + f) / e;
-    if t < 0.0 || t > 1.0 {
+    if !(0.0..=1.0).contains(&t) {
         t = t.clamp(0.0, 1.0);
         let s = ((t * b - c) / a).clamp(0.0, 1.0);
         return (s, t);
