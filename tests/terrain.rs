@@ -224,3 +224,43 @@ fn a_too_long_step_names_the_terrain_contact_that_limits_it() {
         "{problem}"
     );
 }
+
+/// Node positions after `time` of rk4 at steps of `h`, and the located events.
+fn tipped_bar_run(h: f64, locate: bool, time: f64) -> (Vec<Vector3<f64>>, u64) {
+    // A bar falling tilted onto a box's edge (its side lands first), frictionless and
+    // undamped, so it lands, pivots, bounces and flies on.
+    let edge = terrain_box([-0.5, 0.0, 0.25], [1.0, 1.0, 0.5], 1e4, 0.0, 0.0);
+    let text = bar_scene([-0.3, 0.0, 0.66], [0.7, 0.0, 0.56], 1.0, 0.02, &edge)
+        + &format!("[solver]\nmethod = \"rk4\"\nstep_size = {h}\nlocate_events = {locate}\n");
+    let mut s = sim(&text);
+    let steps = (time / h).round() as u64;
+    for k in 0..steps {
+        s.step_to(k as f64 * h, (k + 1) as f64 * h).unwrap();
+    }
+    (
+        (0..2).map(|n| s.node_position(n)).collect(),
+        s.stats().events,
+    )
+}
+
+#[test]
+fn a_landing_side_keeps_rk4_fourth_order() {
+    let time = 0.3;
+    let (reference, events) = tipped_bar_run(1e-5, true, time);
+    println!("reference: {events} located events");
+    assert!(events >= 2, "{events}: the side never landed and left");
+    let mut errors = Vec::new();
+    for h in [1e-3, 5e-4, 2.5e-4] {
+        let (x, events) = tipped_bar_run(h, true, time);
+        let e = (0..2)
+            .map(|n| (x[n] - reference[n]).norm())
+            .fold(0.0, f64::max);
+        println!("rk4 {h:.2e} s: error {e:.3e} m, {events} events");
+        errors.push(e);
+    }
+    let orders: Vec<f64> = errors.windows(2).map(|w| (w[0] / w[1]).log2()).collect();
+    println!("observed orders {orders:.2?}");
+    for o in orders {
+        assert!(o >= 3.3, "order {o:.2}");
+    }
+}
