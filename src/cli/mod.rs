@@ -2,6 +2,7 @@
 
 mod analyze;
 mod bench;
+mod bench_contact;
 mod bench_csv;
 mod bench_effects;
 mod bench_fmu;
@@ -180,6 +181,19 @@ enum BenchCommand {
         #[arg(long, default_value_t = 20)]
         repeats: usize,
     },
+    /// What terrain contact and bar–bar collisions cost: per tower20 step, as ratios to
+    /// the tower alone, and the collision stage alone on towers of growing size.
+    Contact {
+        /// Minimum wall time per measurement, s.
+        #[arg(long, default_value_t = 0.2)]
+        seconds: f64,
+        /// Measurements per case, interleaved; the best is printed.
+        #[arg(long, default_value_t = 10)]
+        repeats: usize,
+        /// Tower sizes in bars for the collision stage (multiples of 3).
+        #[arg(long, value_delimiter = ',', default_value = "600,6000,60000")]
+        bars: Vec<usize>,
+    },
     /// Steel-stiff cables (κ = 1e7 N/m) over 2 s: sdirk3 at 1 ms against dopri5 at
     /// rtol 1e-6 and rk4 at its stability limit, each with its error and wall time.
     Stiff {
@@ -301,6 +315,15 @@ pub fn run(cli: Cli) -> Result<(), String> {
             bench_fmu::check_bars(&bars)?;
             bench_fmu::run(&bars, inputs, &python, &fmu_binary(binary)?)
         }
+        Command::Bench {
+            what:
+                Some(BenchCommand::Contact {
+                    seconds,
+                    repeats,
+                    bars,
+                }),
+            ..
+        } => bench_contact::run(seconds, repeats, &bars),
         Command::Bench {
             what: Some(BenchCommand::Stiff { repeats }),
             ..

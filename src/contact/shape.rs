@@ -142,10 +142,10 @@ impl Shape {
     pub fn may_touch(&self, a: &Vector3<f64>, b: &Vector3<f64>, r: f64) -> bool {
         match self {
             Self::Plane { normal, offset } => normal.dot(a).min(normal.dot(b)) - r < *offset,
-            Self::Cuboid { center, half, .. } => {
-                // The box's circumscribed sphere against the segment.
-                let reach = half.norm() + r;
-                segment_point_distance2(a, b, center) < reach * reach
+            Self::Cuboid { center, axes, half } => {
+                // The segment's bounds in the box's frame against the box grown by r.
+                let (pa, pb) = (axes.tr_mul(&(a - center)), axes.tr_mul(&(b - center)));
+                (0..3).all(|k| pa[k].min(pb[k]) - r < half[k] && pa[k].max(pb[k]) + r > -half[k])
             }
             Self::Heightfield(grid) => {
                 let end = grid.end();
@@ -172,11 +172,17 @@ impl Shape {
             Self::Cuboid { center, axes, half } => {
                 let pa = axes.tr_mul(&(a - center));
                 let d = axes.tr_mul(&(b - a));
+                let pb = pa + d;
                 for k in 0..3 {
                     if d[k] != 0.0 {
                         inside((half[k] - pa[k]) / d[k]);
                         inside((-half[k] - pa[k]) / d[k]);
                     }
+                }
+                // The planes where the nearest face changes lie inside the box: a segment
+                // outside it crosses none.
+                if (0..3).any(|k| pa[k].min(pb[k]) > half[k] || pa[k].max(pb[k]) < -half[k]) {
+                    return;
                 }
                 // |p_k| − h_k = |p_l| − h_l where those two are the largest: inside the box,
                 // where the nearest face changes from k to l.
@@ -218,16 +224,4 @@ impl Shape {
             }
         }
     }
-}
-
-/// `|x − closest point of segment a–b|²`.
-fn segment_point_distance2(a: &Vector3<f64>, b: &Vector3<f64>, x: &Vector3<f64>) -> f64 {
-    let d = b - a;
-    let len2 = d.norm_squared();
-    let s = if len2 > 0.0 {
-        ((x - a).dot(&d) / len2).clamp(0.0, 1.0)
-    } else {
-        0.0
-    };
-    (a + d * s - x).norm_squared()
 }

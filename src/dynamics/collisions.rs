@@ -2,6 +2,12 @@
 //! finds the pairs whose boxes overlap, the narrow phase their closest points; a pair
 //! closer than the sum of its radii pushes apart along the line between those points. A
 //! force at fraction s of a bar splits onto its ends as `(1 − s, s)`, as terrain's does.
+//!
+//! The broad phase runs only when a node has moved more than half a margin since it last
+//! ran: it keeps the pairs closer than their radii plus the margin, and no other pair can
+//! touch before then (each point of a bar has moved less than half the margin). The kept
+//! pairs are sorted, so the forces add up in the same order whenever the list was built:
+//! a restored state gives the same bits.
 
 use nalgebra::{Matrix3, Vector3};
 
@@ -11,10 +17,14 @@ use crate::model::terrain::{Capsule, Collisions};
 /// The broad phase's buffers and what the last evaluation found.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct CollisionScratch {
-    /// Each capsule's bounds.
+    /// Each capsule's bounds, grown by half the margin.
     boxes: Vec<Bounds>,
     /// Capsules sorted along the sweep axis (kept between evaluations: almost sorted).
     order: Vec<u32>,
+    /// Pairs closer than their radii plus the margin at the last broad phase, sorted.
+    near: Vec<(u32, u32)>,
+    /// Node positions at the last broad phase (empty: none yet).
+    anchor: Vec<Vector3<f64>>,
     /// Pairs that push.
     pub contacts: u32,
     /// The deepest interpenetration of two capsules, m (0 without contact).
@@ -27,9 +37,33 @@ impl CollisionScratch {
         Self {
             boxes: vec![[[0.0; 2]; 3]; n],
             order: (0..n as u32).collect(),
+            near: Vec::with_capacity(4 * n),
+            anchor: Vec::new(),
             contacts: 0,
             max_penetration: 0.0,
         }
+    }
+
+    /// Pairs kept by the last broad phase.
+    pub fn kept(&self) -> usize {
+        self.near.len()
+    }
+
+    /// Makes the next evaluation run the broad phase (to time it).
+    pub fn forget(&mut self) {
+        self.anchor.clear();
+    }
+
+    /// Whether the pairs kept hold at the node positions `x`: no node has moved half the
+    /// margin since the broad phase ran.
+    fn holds(&self, x: &[Vector3<f64>], margin: f64) -> bool {
+        let limit = 0.25 * margin * margin;
+        self.anchor.len() == x.len()
+            && self
+                .anchor
+                .iter()
+                .zip(x)
+                .all(|(a, b)| (a - b).norm_squared() < limit)
     }
 }
 
@@ -73,6 +107,36 @@ fn joined(a: &Capsule, b: &Capsule) -> bool {
     a.nodes.iter().any(|n| b.nodes.contains(n))
 }
 
+/// The broad phase at the node positions `x`: keeps the pairs that share no node and are
+/// closer than their radii plus the margin, sorted.
+fn broad_phase(c: &Collisions, x: &[Vector3<f64>], scratch: &mut CollisionScratch) {
+    let grow = 0.5 * c.margin;
+    for (b, cap) in scratch.boxes.iter_mut().zip(&c.capsules) {
+        let [n0, n1] = cap.nodes;
+        *b = capsule_bounds(&x[n0], &x[n1], cap.radius + grow);
+    }
+    let near = &mut scratch.near;
+    near.clear();
+    overlapping_pairs(&scratch.boxes, &mut scratch.order, |i, j| {
+        let (a, b) = (&c.capsules[i], &c.capsules[j]);
+        if joined(a, b) {
+            return;
+        }
+        let (p, q) = (
+            [a.nodes[0], a.nodes[1]].map(|n| &x[n]),
+            [b.nodes[0], b.nodes[1]].map(|n| &x[n]),
+        );
+        let (s, t) = closest_params(p[0], p[1], q[0], q[1]);
+        let gap = (p[0] + (p[1] - p[0]) * s) - (q[0] + (q[1] - q[0]) * t);
+        if gap.norm() < a.radius + b.radius + c.margin {
+            near.push((i as u32, j as u32));
+        }
+    });
+    near.sort_unstable();
+    scratch.anchor.clear();
+    scratch.anchor.extend_from_slice(x);
+}
+
 /// Calls `each(i, j, f, s, t, depth)` for every pushing pair at the node positions and
 /// velocities `(x, ẋ)`.
 #[inline]
@@ -83,15 +147,12 @@ pub fn for_each_contact(
     mut each: impl FnMut(usize, usize, Vector3<f64>, f64, f64, f64),
 ) {
     let (x, v) = nodes;
-    for (b, cap) in scratch.boxes.iter_mut().zip(&c.capsules) {
-        let [n0, n1] = cap.nodes;
-        *b = capsule_bounds(&x[n0], &x[n1], cap.radius);
+    if !scratch.holds(x, c.margin) {
+        broad_phase(c, x, scratch);
     }
-    overlapping_pairs(&scratch.boxes, &mut scratch.order, |i, j| {
+    for &(i, j) in &scratch.near {
+        let (i, j) = (i as usize, j as usize);
         let (a, b) = (&c.capsules[i], &c.capsules[j]);
-        if joined(a, b) {
-            return;
-        }
         let at = |cap: &Capsule, y: &[Vector3<f64>]| [cap.nodes[0], cap.nodes[1]].map(|n| y[n]);
         let (xa, xb, va, vb) = (at(a, x), at(b, x), at(a, v), at(b, v));
         let hit = pair_force(
@@ -103,7 +164,7 @@ pub fn for_each_contact(
         if let Some((f, s, t, depth)) = hit {
             each(i, j, f, s, t, depth);
         }
-    });
+    }
 }
 
 /// Every pair's forces onto the bar ends through `add(end, f)`, and the contact count and

@@ -249,6 +249,10 @@ impl Model {
                 friction: c.friction,
                 slip_velocity: c.slip_velocity,
             },
+            // A twentieth of the mean bar (at least the widest radius): a broad phase
+            // every few centimetres of motion for a robot's metre-long bars.
+            margin: (0.05 * bars.iter().map(|b| b.length).sum::<f64>() / bars.len() as f64)
+                .max(bars.iter().map(|b| b.radius).fold(0.0, f64::max)),
             capsules,
         });
         let mut reactions = Reactions::new(&coords, &inertia, basis == BasisKind::Dense);

@@ -73,4 +73,7 @@ pub struct Collisions {
     pub law: Penalty,
     /// Every bar's capsule, in bar order (static bars too: moving bars hit them).
     pub capsules: Vec<Capsule>,
+    /// How far beyond touching the broad phase keeps a pair, m: it runs again once a node
+    /// has moved half of it.
+    pub margin: f64,
 }
