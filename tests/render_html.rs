@@ -9,6 +9,7 @@ use std::time::Instant;
 
 use nalgebra::Vector3;
 use tensegrity_fmu::render::html::{page, DATA_ELEMENT_ID};
+use tensegrity_fmu::render::terrain::TerrainShape;
 use tensegrity_fmu::render::{Frames, GroundPlane};
 use tensegrity_fmu::scene::{builtin, GroundSpec, PointMassSpec};
 use tensegrity_fmu::{Model, Scene, Simulation};
@@ -40,6 +41,8 @@ fn record(
             normal: g.normal.into(),
             height: g.height,
         }),
+        terrain: TerrainShape::all(m.terrain.as_ref()),
+        bar_radius: m.bars.iter().map(|b| b.radius).collect(),
         times: vec![],
         positions: vec![],
         velocities: vec![],

@@ -12,6 +12,7 @@ use std::path::{Path, PathBuf};
 use base64::engine::general_purpose::STANDARD as BASE64;
 use base64::Engine;
 use serde::Deserialize;
+use tensegrity_fmu::render::terrain::TerrainShape;
 use tensegrity_fmu::render::vtk::write_pvd;
 use tensegrity_fmu::render::{Frames, GroundPlane};
 use tensegrity_fmu::scene::builtin;
@@ -48,6 +49,8 @@ fn record(name: &str, force: [f64; 3], times: &[f64]) -> Frames {
             normal: g.normal.into(),
             height: g.height,
         }),
+        terrain: TerrainShape::all(model.terrain.as_ref()),
+        bar_radius: model.bars.iter().map(|b| b.radius).collect(),
         times: vec![],
         positions: vec![],
         velocities: vec![],
