@@ -13,6 +13,7 @@ use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
 
 use super::faces::{self, Face};
+pub use super::faces::{shade as terrain_shade, BOX_COLOUR, HEIGHTFIELD_COLOUR, PLANE_COLOUR};
 use super::labels::{self, LabelKind};
 use super::terrain::plane_quad;
 use super::view::{depth, project, Fit, BAR_W, TITLE_H};
