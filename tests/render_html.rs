@@ -9,6 +9,7 @@ use std::time::Instant;
 
 use nalgebra::Vector3;
 use tensegrity_fmu::render::html::{page, DATA_ELEMENT_ID};
+use tensegrity_fmu::render::terrain::TerrainShape;
 use tensegrity_fmu::render::{Frames, GroundPlane};
 use tensegrity_fmu::scene::{builtin, GroundSpec, PointMassSpec};
 use tensegrity_fmu::{Model, Scene, Simulation};
@@ -40,6 +41,8 @@ fn record(
             normal: g.normal.into(),
             height: g.height,
         }),
+        terrain: TerrainShape::all(m.terrain.as_ref()),
+        bar_radius: m.bars.iter().map(|b| b.radius).collect(),
         times: vec![],
         positions: vec![],
         velocities: vec![],
@@ -288,4 +291,78 @@ fn large_tower_structure_pages() {
         assert!(html.len() < 100 * bars, "{} bytes", html.len());
         std::fs::write(out_dir().join(format!("tower{bars}.html")), &html).unwrap();
     }
+}
+
+#[test]
+fn page_holds_the_terrain_shapes_and_bar_radii() {
+    let mut scene = builtin("prism2").unwrap();
+    for spec in [
+        r#"kind = "plane"
+point = [0.0, 0.0, -0.5]
+normal = [0.0, 0.0, 2.0]
+stiffness = 1e4"#,
+        r#"kind = "box"
+center = [1.0, 2.0, -0.5]
+size = [2.0, 4.0, 1.0]
+yaw = 90.0
+stiffness = 1e4"#,
+        r#"kind = "heightfield"
+origin = [-1.0, -2.0]
+spacing = [0.5, 0.25]
+heights = [[0.0, 0.1, 0.2, 0.3], [1.0, 1.1, 1.2, 1.3], [2.0, 2.1, 2.2, 2.3]]
+stiffness = 1e4"#,
+    ] {
+        scene.terrain.push(toml::from_str(spec).unwrap());
+    }
+    scene.bars[2].radius = 0.03;
+    let frames = Frames::from_run(&scene, &[0.0]).unwrap();
+    let html = page(&frames);
+    std::fs::write(out_dir().join("terrain.html"), &html).unwrap();
+    let d = embedded(&html);
+    let terrain = d["terrain"].as_array().unwrap();
+    assert_eq!(terrain.len(), 3);
+    assert_eq!(terrain[0]["kind"], "plane");
+    assert_eq!(terrain[0]["normal"], serde_json::json!([0.0, 0.0, 1.0]));
+    assert_eq!(terrain[0]["height"], -0.5);
+    assert_eq!(terrain[1]["kind"], "box");
+    let corners = terrain[1]["points"].as_array().unwrap();
+    assert_eq!(corners.len(), 8);
+    assert_eq!(terrain[1]["quads"].as_array().unwrap().len(), 6);
+    // Yawed 90°: the 2 m edge now runs along y, the 4 m one along x.
+    let corner = |i: usize| -> Vec<f64> {
+        corners[i]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|v| (v.as_f64().unwrap() * 1e9).round() / 1e9)
+            .collect()
+    };
+    assert_eq!(corner(0), [3.0, 1.0, -1.0]);
+    assert_eq!(corner(7), [-1.0, 3.0, 0.0]);
+    assert_eq!(terrain[2]["kind"], "heightfield");
+    assert_eq!(terrain[2]["points"].as_array().unwrap().len(), 12);
+    assert_eq!(
+        terrain[2]["points"][11],
+        serde_json::json!([0.5, -1.5, 2.3])
+    );
+    assert_eq!(terrain[2]["quads"][5], serde_json::json!([6, 7, 11, 10]));
+    assert_eq!(
+        d["bar_radius"],
+        serde_json::json!([0.0, 0.0, 0.03, 0.0, 0.0, 0.0])
+    );
+    // The viewer reads them: a legend row per kind, drawn faces.
+    for needle in [
+        "terrain box",
+        "terrain heightfield",
+        "terrain plane",
+        "drawFaces",
+    ] {
+        assert!(html.contains(needle), "{needle}");
+    }
+    // Without terrain or radii the page says so plainly.
+    let plain = embedded(&page(
+        &Frames::from_run(&builtin("prism2").unwrap(), &[0.0]).unwrap(),
+    ));
+    assert_eq!(plain["terrain"], serde_json::json!([]));
+    assert!(plain["bar_radius"].is_null());
 }

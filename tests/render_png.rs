@@ -387,3 +387,127 @@ fn pins_point_masses_and_the_ground_are_marked() {
         assert!(hits(&img, (d.px)(inside), 3, ground) > 0, "{corner:?}");
     }
 }
+
+/// prism2 (pinned, at rest) with `terrain` (TOML tables, `{z0}` replaced by the lowest
+/// node's height less 0.25 m), its bars of radius `radius`.
+fn prism2_on(terrain: &[&str], radius: f64) -> tensegrity_fmu::Scene {
+    let mut scene = builtin("prism2").unwrap();
+    let nodes = Frames::from_run(&scene, &[0.0])
+        .unwrap()
+        .positions
+        .remove(0);
+    let z0 = nodes.iter().map(|p| p[2]).fold(f64::INFINITY, f64::min);
+    for t in terrain {
+        let text = t.replace("{z0}", &(z0 - 0.25).to_string());
+        scene.terrain.push(toml::from_str(&text).unwrap());
+    }
+    scene.bars.iter_mut().for_each(|b| b.radius = radius);
+    scene
+}
+
+/// The PNG of frame 0 of `scene`, and where it puts points.
+fn picture_of(scene: &tensegrity_fmu::Scene, name: &str) -> (RgbImage, Drawn) {
+    let frames = Frames::from_run(scene, &[0.0]).unwrap();
+    let out = temp(name);
+    let style = Style::new(DEFAULT_AZIMUTH, DEFAULT_ELEVATION, false);
+    picture::write_png(&frames, 0, &style, &out).unwrap();
+    (read_png(&out), drawn(frames))
+}
+
+#[test]
+fn a_box_under_the_structure_is_drawn_shaded_where_projected() {
+    // A 0.4 m high block under the whole prism, its top 5 cm below the lowest node.
+    let block = r#"kind = "box"
+center = [0.0, 0.0, {z0}]
+size = [2.0, 2.0, 0.4]
+stiffness = 1e4"#;
+    let scene = prism2_on(&[block], 0.0);
+    let (img, d) = picture_of(&scene, "box.png");
+    let [x, y, z] = match &d.frames.terrain[..] {
+        [tensegrity_fmu::render::terrain::TerrainShape::Box(m)] => {
+            assert_eq!((m.points.len(), m.quads.len()), (8, 6));
+            m.points.iter().fold([f64::NEG_INFINITY; 3], |a, p| {
+                [a[0].max(p[0]), a[1].max(p[1]), a[2].max(p[2])]
+            })
+        }
+        other => panic!("one box, got {other:?}"),
+    };
+    // The camera (azimuth 30°) sees the +x and +y sides, each lit its own shade.
+    let (east, north) = (
+        picture::terrain_shade(picture::BOX_COLOUR, [1.0, 0.0, 0.0]),
+        picture::terrain_shade(picture::BOX_COLOUR, [0.0, 1.0, 0.0]),
+    );
+    assert_ne!(east, north);
+    let east_mid = (d.px)([x, 0.0, z - 0.2]);
+    let north_mid = (d.px)([0.0, y, z - 0.2]);
+    assert!(
+        hits(&img, east_mid, 3, rgb(east)) >= 40,
+        "+x side at {east_mid:?}"
+    );
+    assert!(
+        hits(&img, north_mid, 3, rgb(north)) >= 40,
+        "+y side at {north_mid:?}"
+    );
+    // The top, lit most, shows around the structure.
+    let top = rgb(picture::terrain_shade(picture::BOX_COLOUR, [0.0, 0.0, 1.0]));
+    assert!(img.pixels().filter(|p| p.0 == top).count() > 5_000);
+    // Without the box the same spots show no box colour.
+    let (plain, _) = picture_of(&builtin("prism2").unwrap(), "no-box.png");
+    assert_eq!(plain.pixels().filter(|p| p.0 == rgb(east)).count(), 0);
+    // The structure stays on top: every bar midpoint is bar-coloured.
+    for &nodes in &d.frames.bars {
+        let (a, b) = d.ends(nodes);
+        let mid = ((a.0 + b.0) / 2, (a.1 + b.1) / 2);
+        assert!(hits(&img, mid, 1, rgb(BAR)) >= 3, "bar at {mid:?}");
+    }
+}
+
+#[test]
+fn a_heightfield_is_drawn_as_its_shaded_quads() {
+    // 3 rows of 4 heights sloping up along x, spanning the structure and more.
+    let field = r#"kind = "heightfield"
+origin = [-2.0, -2.0]
+spacing = [1.3333333333333333, 2.0]
+heights = [[-0.3, -0.2, -0.1, 0.0], [-0.3, -0.2, -0.1, 0.0], [-0.3, -0.2, -0.1, 0.0]]
+stiffness = 1e4"#;
+    let scene = prism2_on(&[field], 0.0);
+    let (img, d) = picture_of(&scene, "heightfield.png");
+    let mesh = d.frames.terrain_meshes().remove(0);
+    assert_eq!((mesh.points.len(), mesh.quads.len()), (12, 6));
+    // Every quad has the same slope, so one shade; it fills much of the picture.
+    let n = tensegrity_fmu::render::terrain::quad_normal(&mesh, mesh.quads[0]);
+    assert!((n[0] + 0.0749).abs() < 1e-3 && n[2] > 0.99, "{n:?}");
+    let shade = rgb(picture::terrain_shade(picture::HEIGHTFIELD_COLOUR, n));
+    let filled = img.pixels().filter(|p| p.0 == shade).count();
+    assert!(filled > 50_000, "{filled} heightfield pixels");
+    // At the middle of each quad in the picture and clear of the structure, the field shows.
+    let rect = picture::plot_rect(PNG_SIZE, &Style::new(30.0, 20.0, false));
+    let members: Vec<_> = d
+        .frames
+        .bars
+        .iter()
+        .chain(&d.frames.cables)
+        .map(|&m| d.ends(m))
+        .collect();
+    let mut seen = 0;
+    for q in &mesh.quads {
+        let c = [0, 1, 2].map(|i| q.iter().map(|&k| mesh.points[k][i]).sum::<f64>() / 4.0);
+        let p = (d.px)(c);
+        let inside = p.0 > rect.0 + 5 && p.0 < rect.2 - 5 && p.1 > rect.1 + 5 && p.1 < rect.3 - 5;
+        if inside && members.iter().all(|&(a, b)| distance(p, a, b) > 30.0) {
+            assert!(hits(&img, p, 3, shade) >= 40, "quad middle {c:?} at {p:?}");
+            seen += 1;
+        }
+    }
+    assert!(seen >= 1, "{seen} quad middles in the picture");
+}
+
+#[test]
+fn bars_with_a_radius_are_drawn_thicker() {
+    let count = |img: &RgbImage| img.pixels().filter(|p| p.0 == rgb(BAR)).count();
+    let (thin, _) = picture_of(&builtin("prism2").unwrap(), "radius-0.png");
+    let (thick, d) = picture_of(&prism2_on(&[], 0.04), "radius-4cm.png");
+    assert_eq!(d.frames.bar_radius, [0.04; 6]);
+    let (a, b) = (count(&thin), count(&thick));
+    assert!(b > 2 * a, "{a} bar pixels without a radius, {b} with 4 cm");
+}

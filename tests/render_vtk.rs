@@ -12,6 +12,7 @@ use std::path::{Path, PathBuf};
 use base64::engine::general_purpose::STANDARD as BASE64;
 use base64::Engine;
 use serde::Deserialize;
+use tensegrity_fmu::render::terrain::TerrainShape;
 use tensegrity_fmu::render::vtk::write_pvd;
 use tensegrity_fmu::render::{Frames, GroundPlane};
 use tensegrity_fmu::scene::builtin;
@@ -48,6 +49,8 @@ fn record(name: &str, force: [f64; 3], times: &[f64]) -> Frames {
             normal: g.normal.into(),
             height: g.height,
         }),
+        terrain: TerrainShape::all(model.terrain.as_ref()),
+        bar_radius: model.bars.iter().map(|b| b.radius).collect(),
         times: vec![],
         positions: vec![],
         velocities: vec![],
@@ -95,9 +98,11 @@ struct PvdDataSet {
     timestep: String,
     #[serde(rename = "@file")]
     file: String,
+    #[serde(rename = "@part")]
+    part: String,
 }
 
-/// The `.pvd`'s (time, file) pairs.
+/// The `.pvd`'s (time, file) pairs of the run (part 0; the terrain is part 1).
 fn read_pvd(path: &Path) -> Vec<(f64, PathBuf)> {
     let pvd: Pvd = quick_xml::de::from_str(&fs::read_to_string(path).unwrap()).unwrap();
     assert_eq!(pvd.kind, "Collection");
@@ -105,6 +110,7 @@ fn read_pvd(path: &Path) -> Vec<(f64, PathBuf)> {
     pvd.collection
         .data_sets
         .iter()
+        .filter(|d| d.part == "0")
         .map(|d| (d.timestep.parse().unwrap(), dir.join(&d.file)))
         .collect()
 }
@@ -466,4 +472,87 @@ fn tower20_ten_seconds_at_30_fps() {
         fs::metadata(&pvd).unwrap().len(),
     );
     check_series(&frames, &pvd);
+}
+
+/// The terrain `.vtp`: its counts, and its cell and point arrays by name.
+#[derive(Deserialize)]
+struct TerrainVtp {
+    #[serde(rename = "PolyData")]
+    poly_data: TerrainData,
+}
+
+#[derive(Deserialize)]
+struct TerrainData {
+    #[serde(rename = "Piece")]
+    piece: TerrainPiece,
+}
+
+#[derive(Deserialize)]
+struct TerrainPiece {
+    #[serde(rename = "@NumberOfPoints")]
+    n_points: usize,
+    #[serde(rename = "@NumberOfPolys")]
+    n_polys: usize,
+    #[serde(rename = "@NumberOfLines")]
+    n_lines: usize,
+    #[serde(rename = "CellData")]
+    cell: Arrays,
+    #[serde(rename = "Points")]
+    points: Arrays,
+    #[serde(rename = "Polys")]
+    polys: Arrays,
+}
+
+#[test]
+fn terrain_is_its_own_polydata_listed_as_part_1() {
+    let mut scene = builtin("prism2").unwrap();
+    for spec in [
+        r#"kind = "box"
+center = [1.0, 2.0, -0.5]
+size = [2.0, 4.0, 1.0]
+stiffness = 1e4"#,
+        // 3 rows of 4 heights.
+        r#"kind = "heightfield"
+origin = [-1.0, -2.0]
+spacing = [0.5, 0.25]
+heights = [[0.0, 0.1, 0.2, 0.3], [1.0, 1.1, 1.2, 1.3], [2.0, 2.1, 2.2, 2.3]]
+stiffness = 1e4"#,
+    ] {
+        scene.terrain.push(toml::from_str(spec).unwrap());
+    }
+    let frames = Frames::from_run(&scene, &[0.0, 0.1]).unwrap();
+    let pvd = out_dir().join("terrain.pvd");
+    write_pvd(&frames, &pvd).unwrap();
+    // The run's files as without terrain, and the terrain beside them in the folder.
+    check_series(&frames, &pvd);
+    let collection = fs::read_to_string(&pvd).unwrap();
+    for t in ["0", "0.1"] {
+        assert!(collection.contains(&format!(
+            "<DataSet timestep=\"{t}\" group=\"\" part=\"1\" file=\"terrain_vtp/terrain_terrain.vtp\"/>"
+        )));
+    }
+    assert_eq!(collection.matches("part=\"0\"").count(), 2);
+    let text = fs::read_to_string(out_dir().join("terrain_vtp/terrain_terrain.vtp")).unwrap();
+    let piece = quick_xml::de::from_str::<TerrainVtp>(&text)
+        .unwrap()
+        .poly_data
+        .piece;
+    // 8 corners and 6 faces of the box, then 12 heights and 3 × 2 quads.
+    assert_eq!((piece.n_points, piece.n_polys, piece.n_lines), (20, 12, 0));
+    assert_eq!(i32s(array(&piece.cell, "kind")), [[1; 6], [2; 6]].concat());
+    assert_eq!(i32s(array(&piece.cell, "shape")), [[1; 6], [2; 6]].concat());
+    let points = f64s(&piece.points.arrays[0]);
+    let corner = |i: usize| [points[3 * i], points[3 * i + 1], points[3 * i + 2]];
+    assert_eq!(corner(0), [0.0, 0.0, -1.0]);
+    assert_eq!(corner(7), [2.0, 4.0, 0.0]);
+    assert_eq!(corner(8), [-1.0, -2.0, 0.0]);
+    assert_eq!(corner(11), [0.5, -2.0, 0.3]);
+    assert_eq!(corner(19), [0.5, -1.5, 2.3]);
+    let offsets = u64s(array(&piece.polys, "offsets"));
+    assert_eq!(offsets, (1..=12).map(|q| 4 * q).collect::<Vec<u64>>());
+    let connectivity = u64s(array(&piece.polys, "connectivity"));
+    // The box's top (+z) face, then the heightfield's first and last quads.
+    assert_eq!(connectivity[4..8], [4, 5, 7, 6]);
+    assert_eq!(connectivity[24..28], [8, 9, 13, 12]);
+    assert_eq!(connectivity[44..48], [14, 15, 19, 18]);
 }

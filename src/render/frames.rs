@@ -5,6 +5,7 @@ use std::path::Path;
 
 use serde::Serialize;
 
+use super::terrain::{Mesh, TerrainShape};
 use crate::model::Model;
 use crate::scene::Scene;
 use crate::sim::Simulation;
@@ -34,6 +35,10 @@ pub struct Frames {
     pub point_masses: Vec<usize>,
     /// The ground plane, if any.
     pub ground: Option<GroundPlane>,
+    /// Terrain shapes in scene order.
+    pub terrain: Vec<TerrainShape>,
+    /// `bar_radius[b]`: bar `b`'s contact radius, m (0 for a line).
+    pub bar_radius: Vec<f64>,
     /// Recorded times, s (increasing).
     pub times: Vec<f64>,
     /// `positions[k][i]`: node `i` at `times[k]`, m.
@@ -78,6 +83,8 @@ impl Frames {
             pinned: (0..model.n_nodes()).filter(|&i| model.pinned[i]).collect(),
             point_masses: scene.point_masses.iter().map(|p| p.node - 1).collect(),
             ground,
+            terrain: TerrainShape::all(model.terrain.as_ref()),
+            bar_radius: model.bars.iter().map(|b| b.radius).collect(),
             times: Vec::new(),
             positions: Vec::new(),
             velocities: Vec::new(),
@@ -195,6 +202,12 @@ impl Frames {
         keep
     }
 
+    /// Each terrain shape's mesh, planes spanned over the structure's extent over the run.
+    pub fn terrain_meshes(&self) -> Vec<Mesh> {
+        let points: Vec<[f64; 3]> = self.positions.iter().flatten().copied().collect();
+        self.terrain.iter().map(|t| t.mesh(&points)).collect()
+    }
+
     /// The largest cable tension over the whole run, N (0 if none).
     pub fn max_tension(&self) -> f64 {
         self.tensions
@@ -211,6 +224,8 @@ impl Frames {
             pinned: self.pinned.clone(),
             point_masses: self.point_masses.clone(),
             ground: self.ground.clone(),
+            terrain: self.terrain.clone(),
+            bar_radius: self.bar_radius.clone(),
             times: Vec::new(),
             positions: Vec::new(),
             velocities: Vec::new(),

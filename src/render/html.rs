@@ -7,6 +7,7 @@ use base64::engine::general_purpose::STANDARD as BASE64;
 use base64::Engine;
 use serde::Serialize;
 
+use super::terrain::TerrainShape;
 use super::{Frames, GroundPlane};
 
 const VIEWER_JS: &str = include_str!("viewer.js");
@@ -31,6 +32,10 @@ struct PageData<'a> {
     pinned: &'a [usize],
     point_masses: &'a [usize],
     ground: Option<&'a GroundPlane>,
+    /// Planes as normal and height, boxes and heightfields as points and quads.
+    terrain: &'a [TerrainShape],
+    /// Bar radii, m; absent when every bar is a line.
+    bar_radius: Option<&'a [f64]>,
     times: &'a [f64],
     /// `f32`: `[(k n_nodes + i) 3 + c]`, node `i` at frame `k`, m.
     positions: String,
@@ -70,6 +75,8 @@ pub fn embedded_json(frames: &Frames) -> String {
         pinned: &frames.pinned,
         point_masses: &frames.point_masses,
         ground: frames.ground.as_ref(),
+        terrain: &frames.terrain,
+        bar_radius: Some(frames.bar_radius.as_slice()).filter(|r| r.iter().any(|&r| r > 0.0)),
         times: &frames.times,
         positions: f32_base64(frames.positions.iter().flatten().flatten()),
         velocities: f32_base64(frames.velocities.iter().flatten().flatten()),
@@ -160,6 +167,8 @@ mod tests {
                 normal: [0.0, 0.0, 1.0],
                 height: -0.5,
             }),
+            terrain: Vec::new(),
+            bar_radius: vec![0.0],
             times: vec![0.0, 0.1],
             positions: vec![
                 vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]],

@@ -5,11 +5,13 @@
 
 pub mod animation;
 mod csv;
+pub mod faces;
 mod frames;
 pub mod html;
 pub mod labels;
 pub mod mode;
 pub mod picture;
+pub mod terrain;
 pub mod view;
 pub mod vtk;
 

@@ -12,7 +12,10 @@ use plotters::element::DashedPathElement;
 use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
 
+use super::faces::{self, Face};
+pub use super::faces::{shade as terrain_shade, BOX_COLOUR, HEIGHTFIELD_COLOUR, PLANE_COLOUR};
 use super::labels::{self, LabelKind};
+use super::terrain::plane_quad;
 use super::view::{depth, project, Fit, BAR_W, TITLE_H};
 pub use super::view::{plot_rect, Style};
 use super::Frames;
@@ -68,8 +71,12 @@ pub fn fit(frames: &Frames, size: (u32, u32), style: &Style) -> Fit {
     let (az, el) = (style.azimuth, style.elevation);
     let nodes = frames.positions.iter().flatten().copied();
     let ground = ground_quad(frames).into_iter().flatten();
+    let terrain = faces::fit_points(frames);
     Fit::new(
-        nodes.chain(ground).map(|p| project(p, az, el)),
+        nodes
+            .chain(ground)
+            .chain(terrain)
+            .map(|p| project(p, az, el)),
         plot_rect(size, style),
     )
 }
@@ -78,49 +85,8 @@ pub fn fit(frames: &Frames, size: (u32, u32), style: &Style) -> Fit {
 /// the run projected onto the plane, widened by a quarter (at least 0.5 m across).
 pub fn ground_quad(frames: &Frames) -> Option<[[f64; 3]; 4]> {
     let g = frames.ground.as_ref()?;
-    let n = g.normal;
-    let a = if n[0].abs() < 0.9 {
-        [1.0, 0.0, 0.0]
-    } else {
-        [0.0, 1.0, 0.0]
-    };
-    let e1 = unit(cross(n, a));
-    let e2 = cross(n, e1);
-    let pts: Vec<[f64; 3]> = frames.positions.iter().flatten().copied().collect();
-    let count = pts.len().max(1) as f64;
-    let mut c = [0.0; 3];
-    for p in &pts {
-        (0..3).for_each(|i| c[i] += p[i] / count);
-    }
-    let off = dot(c, n) - g.height;
-    let c = [c[0] - off * n[0], c[1] - off * n[1], c[2] - off * n[2]];
-    let r = pts
-        .iter()
-        .map(|p| {
-            let d = [p[0] - c[0], p[1] - c[1], p[2] - c[2]];
-            dot(d, e1).abs().max(dot(d, e2).abs())
-        })
-        .fold(0.25_f64, f64::max)
-        * 1.25;
-    let at = |s: f64, t: f64| [0, 1, 2].map(|i| c[i] + r * (s * e1[i] + t * e2[i]));
-    Some([at(-1.0, -1.0), at(1.0, -1.0), at(1.0, 1.0), at(-1.0, 1.0)])
-}
-
-fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-}
-
-fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ]
-}
-
-fn unit(a: [f64; 3]) -> [f64; 3] {
-    let n = dot(a, a).sqrt();
-    a.map(|x| x / n)
+    let points: Vec<[f64; 3]> = frames.positions.iter().flatten().copied().collect();
+    Some(plane_quad(g.normal, g.height, &points))
 }
 
 /// Errors of plotters as messages.
@@ -168,53 +134,89 @@ pub fn draw_frame<DB: DrawingBackend>(
             }
         }
     }
-    // Bars under cables, so that cables crossing in front of or behind a bar stay
-    // visible (a tower's cables run over its bars); within each, far before near.
-    let mut bars: Vec<usize> = (0..frames.bars.len()).collect();
-    bars.sort_by(|&a, &b| {
-        depth(mid(frames.bars[a]), az, el).total_cmp(&depth(mid(frames.bars[b]), az, el))
-    });
-    for &b in &bars {
-        let [p, q] = frames.bars[b];
-        area.draw(&PathElement::new(
-            vec![px(pos[p]), px(pos[q])],
-            BAR.stroke_width(thick),
-        ))
-        .map_err(&err)?;
+    let faces = faces::faces(frames, az, el);
+    let members: Vec<[usize; 2]> = frames.bars.iter().chain(&frames.cables).copied().collect();
+    let ends: Vec<_> = members.iter().map(|&[a, b]| (pos[a], pos[b])).collect();
+    let hidden = faces::occlusion(&faces, &ends, az, el, occlusion_tolerance(frames, k));
+    let plot = plot_rect(area.dim_in_pixel(), style);
+    for face in &faces {
+        draw_face(area, face, &px, plot)?;
     }
-    let mut cables: Vec<usize> = (0..frames.cables.len()).collect();
-    cables.sort_by(|&a, &b| {
-        depth(mid(frames.cables[a]), az, el).total_cmp(&depth(mid(frames.cables[b]), az, el))
-    });
-    let tensions = &frames.tensions[k];
-    for &j in &cables {
-        let [a, b] = frames.cables[j];
-        let ends = [px(pos[a]), px(pos[b])];
-        let t = tensions[j];
-        if is_slack(t, max_tension) {
-            let dash = (4 * thin) as i32;
-            area.draw(&DashedPathElement::new(
-                ends,
-                dash,
-                dash,
-                SLACK.stroke_width(thin),
-            ))
-            .map_err(&err)?;
-        } else {
-            let c = tension_colour(t, max_tension);
-            area.draw(&PathElement::new(ends.to_vec(), c.stroke_width(thin)))
-                .map_err(&err)?;
+    let scale = fit.scale;
+    let draw_members = |behind: bool| -> Result<(), String> {
+        // Behind the terrain, faint.
+        let ink = |c: RGBColor| c.mix(if behind { 0.3 } else { 1.0 });
+        // The stretches of member `m` on this side of the terrain, as pixel segments.
+        let pieces = |m: usize| {
+            let [a, b] = members[m];
+            let at = |s: f64| px([0, 1, 2].map(|i| pos[a][i] + s * (pos[b][i] - pos[a][i])));
+            let spans = faces::stretches(hidden[m], behind);
+            spans
+                .into_iter()
+                .map(|(s0, s1)| vec![at(s0), at(s1)])
+                .collect::<Vec<_>>()
+        };
+        // Bars under cables, so that cables crossing in front of or behind a bar stay
+        // visible (a tower's cables run over its bars); within each, far before near.
+        let nb = frames.bars.len();
+        let depth_of = |m: usize| depth(mid(members[m]), az, el);
+        let mut bars: Vec<usize> = (0..nb).collect();
+        bars.sort_by(|&a, &b| depth_of(a).total_cmp(&depth_of(b)));
+        for &b in &bars {
+            // A bar with a radius looks as thick as it is, where that is thicker.
+            let r = frames.bar_radius.get(b).copied().unwrap_or(0.0);
+            let width = thick.max((2.0 * r * scale).round().min(80.0) as u32);
+            for line in pieces(b) {
+                area.draw(&PathElement::new(line, ink(BAR).stroke_width(width)))
+                    .map_err(&err)?;
+            }
         }
-    }
-    for &i in &frames.pinned {
+        let mut cables: Vec<usize> = (0..frames.cables.len()).collect();
+        cables.sort_by(|&a, &b| depth_of(nb + a).total_cmp(&depth_of(nb + b)));
+        let tensions = &frames.tensions[k];
+        for &j in &cables {
+            let t = tensions[j];
+            for line in pieces(nb + j) {
+                if is_slack(t, max_tension) {
+                    let dash = (4 * thin) as i32;
+                    area.draw(&DashedPathElement::new(
+                        line,
+                        dash,
+                        dash,
+                        ink(SLACK).stroke_width(thin),
+                    ))
+                    .map_err(&err)?;
+                } else {
+                    let c = tension_colour(t, max_tension);
+                    area.draw(&PathElement::new(line, ink(c).stroke_width(thin)))
+                        .map_err(&err)?;
+                }
+            }
+        }
+        Ok(())
+    };
+    draw_members(true)?;
+    draw_members(false)?;
+    // Markers of nodes behind the terrain are faint too.
+    let marked: Vec<_> = frames
+        .pinned
+        .iter()
+        .chain(&frames.point_masses)
+        .map(|&i| (pos[i], pos[i]))
+        .collect();
+    let behind = faces::occlusion(&faces, &marked, az, el, occlusion_tolerance(frames, k));
+    let ink = |n: usize| if behind[n] != 0 { 0.3 } else { 1.0 };
+    for (n, &i) in frames.pinned.iter().enumerate() {
         let (x, y) = px(pos[i]);
         let tri = vec![(x, y), (x - r, y + 2 * r), (x + r, y + 2 * r)];
-        area.draw(&Polygon::new(tri, PIN.filled())).map_err(&err)?;
-    }
-    for &i in &frames.point_masses {
-        area.draw(&Circle::new(px(pos[i]), r, BAR.filled()))
+        area.draw(&Polygon::new(tri, PIN.mix(ink(n)).filled()))
             .map_err(&err)?;
-        area.draw(&Circle::new(px(pos[i]), r, WHITE.stroke_width(1)))
+    }
+    for (n, &i) in frames.point_masses.iter().enumerate() {
+        let a = ink(frames.pinned.len() + n);
+        area.draw(&Circle::new(px(pos[i]), r, BAR.mix(a).filled()))
+            .map_err(&err)?;
+        area.draw(&Circle::new(px(pos[i]), r, WHITE.mix(a).stroke_width(1)))
             .map_err(&err)?;
     }
     if style.labels {
@@ -230,6 +232,65 @@ pub fn draw_frame<DB: DrawingBackend>(
     }
     if style.colour_bar {
         draw_colour_bar(area, max_tension, thin, w as i32)?;
+    }
+    Ok(())
+}
+
+/// How far behind a face a member's middle must lie to count as hidden, m: a bar resting
+/// on the terrain, or pressed a little into it, stays in front.
+fn occlusion_tolerance(frames: &Frames, k: usize) -> f64 {
+    let pos = &frames.positions[k];
+    let (mut lo, mut hi) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
+    for p in pos {
+        for i in 0..3 {
+            (lo[i], hi[i]) = (lo[i].min(p[i]), hi[i].max(p[i]));
+        }
+    }
+    let size = (0..3).map(|i| hi[i] - lo[i]).fold(0.0, f64::max);
+    let radius = frames.bar_radius.iter().copied().fold(0.0, f64::max);
+    0.02 * size + 2.0 * radius
+}
+
+/// One terrain face, clipped to the plot.
+fn draw_face<DB: DrawingBackend>(
+    area: &DrawingArea<DB, Shift>,
+    face: &Face,
+    px: &impl Fn([f64; 3]) -> (i32, i32),
+    plot: (i32, i32, i32, i32),
+) -> Result<(), String> {
+    let err = drawing::<DrawingAreaErrorKind<DB::ErrorType>>("the terrain");
+    let corners: Vec<(f64, f64)> = face
+        .corners
+        .iter()
+        .map(|&p| {
+            let (x, y) = px(p);
+            (f64::from(x), f64::from(y))
+        })
+        .collect();
+    let poly = faces::clip(&corners, plot);
+    if poly.len() < 3 {
+        return Ok(());
+    }
+    area.draw(&Polygon::new(poly.clone(), face.fill.filled()))
+        .map_err(&err)?;
+    let edge = faces::scale(face.fill, if face.kind == "box" { 0.6 } else { 0.88 });
+    let mut outline = poly;
+    outline.push(outline[0]);
+    area.draw(&PathElement::new(outline, edge)).map_err(&err)?;
+    if face.kind == "plane" {
+        // A grid, as on the ground, so that the plane reads as a floor.
+        let q = &face.corners;
+        for s in 1..8 {
+            let f = f64::from(s) / 8.0;
+            let lerp = |a: [f64; 3], b: [f64; 3]| [0, 1, 2].map(|i| a[i] + f * (b[i] - a[i]));
+            for (a, b) in [
+                (lerp(q[0], q[1]), lerp(q[3], q[2])),
+                (lerp(q[0], q[3]), lerp(q[1], q[2])),
+            ] {
+                area.draw(&PathElement::new(vec![px(a), px(b)], edge))
+                    .map_err(&err)?;
+            }
+        }
     }
     Ok(())
 }

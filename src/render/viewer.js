@@ -39,6 +39,8 @@
     slack: "#96a0b0",            // rgb(150, 160, 176)
     ground: "rgba(120, 134, 107, 0.18)",
     groundLine: "rgba(90, 104, 80, 0.35)",
+    // Terrain base colours before shading (as in the PNG pictures).
+    terrain: { plane: [226, 222, 205], box: [200, 162, 118], heightfield: [142, 180, 122] },
     highlight: "#e8590c"
   };
   // Cable colour ramp: tension 0 → max (blue, cyan, green, orange, red).
@@ -95,6 +97,25 @@
   function dot(a, b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
   function cross(a, b) { return [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]; }
   function unit(a) { var l = Math.hypot(a[0], a[1], a[2]) || 1; return [a[0] / l, a[1] / l, a[2] / l]; }
+
+  // ---- terrain ---------------------------------------------------------------------------
+  // Boxes and heightfields as quads with a shade fixed by their normal (light from above,
+  // a little from +x and +y); planes are drawn as the ground is.
+  var LIGHT = [0.398, 0.221, 0.890];
+  var TERRAIN = D.terrain || [];
+  var terrainFaces = [];
+  TERRAIN.forEach(function (t, shape) {
+    if (t.kind === "plane") return;
+    t.quads.forEach(function (q) {
+      var p = q.map(function (k) { return t.points[k]; });
+      var n = unit(cross(sub(p[2], p[0]), sub(p[3], p[1])));
+      var lit = 0.6 + 0.4 * Math.max(0, dot(n, LIGHT));
+      var rgb = STYLE.terrain[t.kind].map(function (c) { return Math.round(c * lit); });
+      var edge = rgb.map(function (c) { return Math.round(c * (t.kind === "box" ? 0.6 : 0.88)); });
+      terrainFaces.push({ kind: t.kind, shape: shape, corners: p, normal: n, rgb: rgb, edge: "rgb(" + edge.join(",") + ")" });
+    });
+  });
+  var barRadius = D.bar_radius || [];
 
   // ---- camera (z up) ---------------------------------------------------------------------
   var FOV = 35 * Math.PI / 180;
@@ -182,11 +203,10 @@
     draw();
   }
 
-  function drawGround() {
-    var g = D.ground;
-    if (!g) return;
-    var n = unit(g.normal);
-    var c0 = sub(cam.center, mul(n, dot(n, cam.center) - g.height));
+  // A plane `n · x = height` as a gridded quad around the view's centre.
+  function drawPlane(normal, height, fill, line) {
+    var n = unit(normal);
+    var c0 = sub(cam.center, mul(n, dot(n, cam.center) - height));
     var a = Math.abs(n[0]) < 0.9 ? [1, 0, 0] : [0, 1, 0];
     var t1 = unit(cross(n, a)), t2 = cross(n, t1);
     var s = radius * 1.6, cells = 10;
@@ -200,10 +220,10 @@
         if (m === 0) ctx.moveTo(p[0], p[1]); else ctx.lineTo(p[0], p[1]);
       });
       ctx.closePath();
-      ctx.fillStyle = STYLE.ground;
+      ctx.fillStyle = fill;
       ctx.fill();
     }
-    ctx.strokeStyle = STYLE.groundLine;
+    ctx.strokeStyle = line;
     ctx.lineWidth = 1;
     ctx.setLineDash([]);
     ctx.beginPath();
@@ -216,6 +236,115 @@
       });
     }
     ctx.stroke();
+  }
+
+  function drawGround() {
+    if (D.ground) drawPlane(D.ground.normal, D.ground.height, STYLE.ground, STYLE.groundLine);
+    TERRAIN.forEach(function (t) {
+      if (t.kind !== "plane") return;
+      var lit = 0.6 + 0.4 * Math.max(0, dot(unit(t.normal), LIGHT));
+      var rgb = STYLE.terrain.plane.map(function (c) { return Math.round(c * lit); });
+      drawPlane(t.normal, t.height, "rgb(" + rgb.join(",") + ")", "rgba(90, 90, 70, 0.3)");
+    });
+  }
+
+  // The terrain faces seen this frame in drawing order: heightfield quads far first, each
+  // box's near faces (those turned away left out) after the quads it may hide and before
+  // the quads in front of one of those faces' planes (as in the PNG pictures).
+  function visibleFaces() {
+    var quads = [], boxes = [], byShape = {};
+    terrainFaces.forEach(function (f) {
+      var q = f.corners.map(toCam);
+      if (!q.every(function (c) { return c[2] > NEAR * radius; })) return;
+      var facing = dot(f.normal, sub(basis.eye, f.corners[0])) > 0;
+      if (f.kind === "box" && !facing) return;
+      var pts = q.map(camToScreen);
+      var xs = pts.map(function (p) { return p[0]; }), ys = pts.map(function (p) { return p[1]; });
+      var v = {
+        face: f, pts: pts, facing: facing,
+        depth: (q[0][2] + q[1][2] + q[2][2] + q[3][2]) / 4,
+        box: [Math.min.apply(null, xs), Math.min.apply(null, ys), Math.max.apply(null, xs), Math.max.apply(null, ys)]
+      };
+      if (f.kind !== "box") { quads.push(v); return; }
+      if (!byShape[f.shape]) { byShape[f.shape] = []; boxes.push(byShape[f.shape]); }
+      byShape[f.shape].push(v);
+    });
+    var far = function (a, b) { return b.depth - a.depth; };
+    quads.sort(far);
+    var mean = function (b) { return b.reduce(function (s, v) { return s + v.depth; }, 0) / b.length; };
+    boxes.sort(function (a, b) { return mean(b) - mean(a); });
+    var layers = boxes.map(function () { return []; });
+    layers.push([]);
+    quads.forEach(function (v) {
+      var c = mul(v.face.corners.reduce(add, [0, 0, 0]), 0.25), l = 0;
+      boxes.forEach(function (b, i) {
+        if (b.some(function (f) { return dot(f.face.normal, sub(c, f.face.corners[0])) > 0; })) l = i + 1;
+      });
+      layers[l].push(v);
+    });
+    var out = [];
+    layers.forEach(function (l, i) { out = out.concat(l, boxes[i] || []); });
+    return out;
+  }
+
+  function insidePoly(x, y, pts) {
+    var odd = false;
+    for (var k = 0, j = pts.length - 1; k < pts.length; j = k++) {
+      var p = pts[k], r = pts[j];
+      if ((p[1] > y) !== (r[1] > y) && x < p[0] + (y - p[1]) / (r[1] - p[1]) * (r[0] - p[0])) odd = !odd;
+    }
+    return odd;
+  }
+
+  // Members are judged in PIECES pieces: bit i of the mask is set when piece i lies more
+  // than `tol` beyond a face's plane (seen from the eye) inside its picture. Such pieces
+  // are drawn faintly over the terrain, the rest as usual.
+  var PIECES = 8;
+  function hiddenPieces(faces, a, b, tol) {
+    var mask = 0;
+    var mids = [], seen = [];
+    for (var i = 0; i < PIECES; i++) {
+      var p = add(a, mul(sub(b, a), (i + 0.5) / PIECES));
+      mids.push(p);
+      seen.push(project3(p));
+    }
+    faces.forEach(function (v) {
+      var f = v.face, side = v.facing ? 1 : -1, c = f.corners[0];
+      for (var i = 0; i < PIECES; i++) {
+        var q = seen[i];
+        if (!q || q[0] < v.box[0] || q[0] > v.box[2] || q[1] < v.box[1] || q[1] > v.box[3]) continue;
+        if (dot(f.normal, sub(mids[i], c)) * side < -tol && insidePoly(q[0], q[1], v.pts)) {
+          mask |= 1 << i;
+        }
+      }
+    });
+    return mask;
+  }
+
+  // [from, to] fractions of the pieces whose bit equals `behind`, neighbours joined.
+  function stretches(mask, behind) {
+    var out = [];
+    for (var i = 0; i < PIECES; i++) {
+      if (((mask >> i) & 1) === 1 !== behind) continue;
+      var last = out[out.length - 1];
+      if (last && last[1] === i / PIECES) last[1] = (i + 1) / PIECES;
+      else out.push([i / PIECES, (i + 1) / PIECES]);
+    }
+    return out;
+  }
+
+  function drawFaces(faces) {
+    faces.forEach(function (v) {
+      ctx.beginPath();
+      v.pts.forEach(function (p, m) { if (m === 0) ctx.moveTo(p[0], p[1]); else ctx.lineTo(p[0], p[1]); });
+      ctx.closePath();
+      ctx.fillStyle = "rgb(" + v.face.rgb.join(",") + ")";
+      ctx.fill();
+      ctx.strokeStyle = v.face.edge;
+      ctx.lineWidth = 1;
+      ctx.setLineDash([]);
+      ctx.stroke();
+    });
   }
 
   function isSel(kind, index) {
@@ -258,11 +387,25 @@
     segs.forEach(function (s) { s.depth = (camPos[s.a][2] + camPos[s.b][2]) / 2; });
     segs.sort(function (x, y) { return y.depth - x.depth; });
     var T = D.tensions[frame];
-
-    ctx.lineCap = "round";
+    var faces = visibleFaces();
+    var tol = 0.04 * radius + 2 * barRadius.reduce(function (m, r) { return Math.max(m, r); }, 0);
     segs.forEach(function (s) {
-      var seg = clipSeg(camPos[s.a], camPos[s.b]);
-      if (!seg || !isFinite(seg[0][0] + seg[0][1] + seg[1][0] + seg[1][1])) return;
+      s.mask = faces.length ? hiddenPieces(faces, pos(frame, s.a), pos(frame, s.b), tol) : 0;
+    });
+
+    function drawSegs(behind) {
+      ctx.lineCap = "round";
+      ctx.globalAlpha = behind ? 0.3 : 1;
+      segs.forEach(function (s) {
+        var A = camPos[s.a], B = camPos[s.b];
+        stretches(s.mask, behind).forEach(function (st) {
+          var seg = clipSeg(add(A, mul(sub(B, A), st[0])), add(A, mul(sub(B, A), st[1])));
+          if (!seg || !isFinite(seg[0][0] + seg[0][1] + seg[1][0] + seg[1][1])) return;
+          strokeSeg(s, seg);
+        });
+      });
+    }
+    function strokeSeg(s, seg) {
       var hl = isSel(s.kind, s.index);
       ctx.beginPath();
       ctx.moveTo(seg[0][0], seg[0][1]);
@@ -270,7 +413,9 @@
       if (s.kind === "bar") {
         ctx.setLineDash([]);
         ctx.strokeStyle = hl ? STYLE.barHighlight : STYLE.bar;
-        ctx.lineWidth = barWidth;
+        // A bar with a radius is drawn as thick as it is, where that is thicker.
+        var r = barRadius[s.index] || 0;
+        ctx.lineWidth = Math.max(barWidth, r > 0 && s.depth > 0 ? 2 * r * basis.focal / s.depth : 0);
       } else {
         var t = num(T[s.index]);
         if (!(t > 0)) {
@@ -289,7 +434,10 @@
         }
       }
       ctx.stroke();
-    });
+    }
+    drawFaces(faces);
+    drawSegs(true);
+    drawSegs(false);
     ctx.setLineDash([]);
 
     // Nodes, far to near. Where members are only a few pixels long (a large structure seen
@@ -598,6 +746,16 @@
     if (D.point_masses.length) row("point mass", function (g) {
       g.fillStyle = STYLE.pointMass;
       g.beginPath(); g.arc(18, 8, 6, 0, 2 * Math.PI); g.fill();
+    });
+    var kinds = { box: "terrain box", heightfield: "terrain heightfield", plane: "terrain plane" };
+    Object.keys(kinds).forEach(function (kind) {
+      if (!TERRAIN.some(function (t) { return t.kind === kind; })) return;
+      row(kinds[kind], function (g) {
+        var c = STYLE.terrain[kind];
+        g.fillStyle = "rgb(" + c.join(",") + ")"; g.fillRect(2, 3, 32, 10);
+        g.strokeStyle = "rgb(" + c.map(function (v) { return Math.round(v * 0.6); }).join(",") + ")";
+        g.strokeRect(2.5, 3.5, 31, 9);
+      });
     });
     if (D.ground) row("ground plane", function (g) {
       g.fillStyle = STYLE.ground; g.fillRect(2, 3, 32, 10);

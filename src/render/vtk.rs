@@ -13,6 +13,13 @@
 //! - Point data `velocity` (Float64, 3 components, m/s), `node` (Int32, 1-based node
 //!   number) and `pinned` (Int32, 1 for a pinned node, else 0).
 //!
+//! Terrain, where the scene has some, is one more PolyData file in the folder,
+//! `NAME_vtp/NAME_terrain.vtp`, listed in the collection as part 1 of every time so that
+//! ParaView opens it with the run: each shape's quads as polygons (a box's 8 corners and 6
+//! faces, a heightfield's grid, subsampled past 3000 quads, a plane as one quad over the
+//! structure's extent over the run), with cell data `shape` (Int32, the 1-based terrain
+//! number) and `kind` (Int32: 0 plane, 1 box, 2 heightfield).
+//!
 //! The XML is written with quick-xml's `Writer`; the arrays in VTK's inline `binary`
 //! format (`header_type="UInt64"`: base64 of the byte count followed by the little-endian
 //! values, no compression), so every double reads back bit for bit. Times in the `.pvd` are written as the shortest decimal that reads back
@@ -34,6 +41,7 @@ use base64::Engine;
 use quick_xml::events::{BytesDecl, BytesText, Event};
 use quick_xml::Writer;
 
+use super::terrain::TerrainShape;
 use super::Frames;
 
 /// Writes `frames` as the ParaView time series `path` (which must end in `.pvd`) plus the
@@ -164,18 +172,24 @@ fn write_all(
     let names: Vec<String> = (0..frames.len())
         .map(|k| format!("{stem}_{k:0digits$}.vtp"))
         .collect();
-    for (k, name) in names.iter().enumerate() {
-        // A new file in a new private folder: nothing planted there to follow.
-        let file = tmp_folder.join(name);
+    // A new file in a new private folder: nothing planted there to follow.
+    let create = |name: &str, write: &dyn Fn(File) -> Result<(), String>| {
         fs::OpenOptions::new()
             .write(true)
             .create_new(true)
-            .open(&file)
+            .open(tmp_folder.join(name))
             .map_err(|e| e.to_string())
-            .and_then(|out| write_vtp(frames, k, out))
-            .map_err(|e| format!("{name}: {e}"))?;
+            .and_then(write)
+            .map_err(|e| format!("{name}: {e}"))
+    };
+    for (k, name) in names.iter().enumerate() {
+        create(name, &|out| write_vtp(frames, k, out))?;
     }
-    write_collection(frames, folder_name, &names, pvd)
+    let terrain = (!frames.terrain.is_empty()).then(|| format!("{stem}_terrain.vtp"));
+    if let Some(name) = &terrain {
+        create(name, &|out| write_terrain(frames, out))?;
+    }
+    write_collection(frames, folder_name, &names, terrain.as_deref(), pvd)
 }
 
 /// A number type of a VTK `DataArray`: its `type` name and its little-endian bytes.
@@ -323,11 +337,68 @@ fn write_vtp(frames: &Frames, k: usize, file: File) -> Result<(), String> {
     })
 }
 
-/// The VTK Collection listing one `DataSet` per time, files relative to the `.pvd`.
+/// The terrain's `.vtp`: every shape's quads as polygons.
+fn write_terrain(frames: &Frames, file: File) -> Result<(), String> {
+    let (mut points, mut connectivity, mut offsets) = (Vec::<f64>::new(), Vec::new(), Vec::new());
+    let (mut shape, mut kind) = (Vec::<i32>::new(), Vec::<i32>::new());
+    for (number, (t, mesh)) in frames
+        .terrain
+        .iter()
+        .zip(frames.terrain_meshes())
+        .enumerate()
+    {
+        let first = (points.len() / 3) as u64;
+        points.extend(mesh.points.iter().flatten());
+        for q in &mesh.quads {
+            connectivity.extend(q.iter().map(|&i| first + i as u64));
+            offsets.push(connectivity.len() as u64);
+            shape.push(number as i32 + 1);
+            kind.push(match t {
+                TerrainShape::Plane { .. } => 0,
+                TerrainShape::Box(_) => 1,
+                TerrainShape::Heightfield(_) => 2,
+            });
+        }
+    }
+    let (n_points, n_polys) = ((points.len() / 3).to_string(), offsets.len().to_string());
+    write_vtk_file(file, "PolyData", "1.0", Some("UInt64"), |xml| {
+        xml.create_element("PolyData").write_inner_content(|xml| {
+            xml.create_element("Piece")
+                .with_attributes([
+                    ("NumberOfPoints", n_points.as_str()),
+                    ("NumberOfVerts", "0"),
+                    ("NumberOfLines", "0"),
+                    ("NumberOfStrips", "0"),
+                    ("NumberOfPolys", n_polys.as_str()),
+                ])
+                .write_inner_content(|xml| {
+                    xml.create_element("CellData")
+                        .with_attribute(("Scalars", "kind"))
+                        .write_inner_content(|xml| {
+                            data_array(xml, Some("kind"), 1, &kind)?;
+                            data_array(xml, Some("shape"), 1, &shape)
+                        })?;
+                    xml.create_element("Points")
+                        .write_inner_content(|xml| data_array(xml, None, 3, &points))?;
+                    xml.create_element("Polys").write_inner_content(|xml| {
+                        data_array(xml, Some("connectivity"), 1, &connectivity)?;
+                        data_array(xml, Some("offsets"), 1, &offsets)
+                    })?;
+                    Ok(())
+                })?;
+            Ok(())
+        })?;
+        Ok(())
+    })
+}
+
+/// The VTK Collection listing one `DataSet` per time, files relative to the `.pvd`, and
+/// the terrain as part 1 of every time.
 fn write_collection(
     frames: &Frames,
     folder_name: &str,
     names: &[String],
+    terrain: Option<&str>,
     file: File,
 ) -> Result<(), String> {
     write_vtk_file(file, "Collection", "0.1", None, |xml| {
@@ -343,6 +414,17 @@ fn write_collection(
                             ("file", path.as_str()),
                         ])
                         .write_empty()?;
+                    if let Some(terrain) = terrain {
+                        let path = format!("{folder_name}/{terrain}");
+                        xml.create_element("DataSet")
+                            .with_attributes([
+                                ("timestep", time.as_str()),
+                                ("group", ""),
+                                ("part", "1"),
+                                ("file", path.as_str()),
+                            ])
+                            .write_empty()?;
+                    }
                 }
                 Ok(())
             })?;
