@@ -157,6 +157,73 @@ fn ground() -> impl Strategy<Value = Value> {
         })
 }
 
+/// The contact law of a terrain shape or of collisions.
+fn law() -> impl Strategy<Value = [(&'static str, Option<Value>); 3]> {
+    (magnitude(), magnitude(), magnitude()).prop_map(|(k, c, mu)| {
+        [
+            ("stiffness", Some(float(1e4 * k))),
+            ("damping", Some(float(10.0 * c))),
+            ("friction", Some(float(0.1 * mu))),
+        ]
+    })
+}
+
+/// A plane, a box or a small heightfield near the structure.
+fn terrain_shape() -> impl Strategy<Value = Value> {
+    (
+        0u8..3,
+        vec3(coordinate()),
+        vec3(magnitude()),
+        law(),
+        vec(coordinate(), 6),
+    )
+        .prop_map(|(kind, at, size, law, heights)| {
+            let mut entries = match kind {
+                0 => vec![
+                    ("kind", Some(Value::String("plane".into()))),
+                    ("point", Some(at)),
+                ],
+                1 => vec![
+                    ("kind", Some(Value::String("box".into()))),
+                    ("center", Some(at)),
+                    ("size", Some(size)),
+                    ("yaw", Some(float(30.0))),
+                ],
+                _ => {
+                    let rows = heights
+                        .chunks(3)
+                        .map(|r| Value::Array(r.iter().map(|&h| float(h - 1.0)).collect()))
+                        .collect();
+                    vec![
+                        ("kind", Some(Value::String("heightfield".into()))),
+                        ("heights", Some(Value::Array(rows))),
+                        ("origin", Some(Value::Array(vec![float(-1.0), float(-1.0)]))),
+                        ("spacing", Some(Value::Array(vec![float(1.0), float(2.0)]))),
+                    ]
+                }
+            };
+            entries.extend(law);
+            table(entries)
+        })
+}
+
+/// Terrain shapes, collisions and a bar radius, each optional.
+fn contact() -> impl Strategy<Value = Contact> {
+    (
+        option::weighted(0.2, ground()),
+        option::weighted(0.2, vec(terrain_shape(), 1..3)),
+        option::weighted(0.15, law()),
+        option::weighted(0.3, magnitude()),
+    )
+}
+
+type Contact = (
+    Option<Value>,
+    Option<Vec<Value>>,
+    Option<[(&'static str, Option<Value>); 3]>,
+    Option<f64>,
+);
+
 fn solver() -> impl Strategy<Value = Value> {
     (
         select(vec!["dopri5", "dopri5", "rk4", "rattle", "sdirk3", "euler"]),
@@ -234,7 +301,7 @@ pub fn structured() -> impl Strategy<Value = Input> {
         let more = (
             vec(load(n), 0..3),
             vec((free_node(n), magnitude()), 0..2),
-            option::weighted(0.2, ground()),
+            contact(),
             option::weighted(0.2, magnitude()),
             option::weighted(0.2, vec(vec3(coordinate()), n)),
             solver(),
@@ -261,7 +328,7 @@ type Parts = (
 type More = (
     Vec<Value>,
     Vec<(Value, f64)>,
-    Option<Value>,
+    Contact,
     Option<f64>,
     Option<Vec<Value>>,
     Value,
@@ -271,8 +338,10 @@ type More = (
 
 fn assemble(n: usize, parts: Parts, more: More) -> Input {
     let (nodes, joints, masses, cables, pin_first, forces, gravity) = parts;
-    let (loads, payloads, ground, prestress, velocities, solver, (json, equilibrium, fmu), edits) =
+    let (loads, payloads, contact, prestress, velocities, solver, (json, equilibrium, fmu), edits) =
         more;
+    let (ground, terrain, collisions, radius) = contact;
+    let radius = radius.map(|r| float(0.01 * r));
     let mut bars: Vec<Value> = masses
         .iter()
         .enumerate()
@@ -281,14 +350,17 @@ fn assemble(n: usize, parts: Parts, more: More) -> Input {
             table(vec![
                 ("nodes", Some(Value::Array(nodes.into()))),
                 ("mass", Some(float(m))),
+                ("radius", radius.clone()),
             ])
         })
         .collect();
-    bars.extend(
-        joints
-            .into_iter()
-            .map(|(nodes, m)| table(vec![("nodes", Some(nodes)), ("mass", Some(float(m)))])),
-    );
+    bars.extend(joints.into_iter().map(|(nodes, m)| {
+        table(vec![
+            ("nodes", Some(nodes)),
+            ("mass", Some(float(m))),
+            ("radius", radius.clone()),
+        ])
+    }));
     let mut pinned = Vec::new();
     if pin_first {
         pinned.push(Value::Integer(1));
@@ -321,6 +393,8 @@ fn assemble(n: usize, parts: Parts, more: More) -> Input {
         ("gravity", gravity),
         ("velocities", velocities.map(Value::Array)),
         ("ground", ground),
+        ("terrain", terrain.map(Value::Array)),
+        ("collisions", collisions.map(|law| table(law.into()))),
         (
             "prestress",
             prestress.map(|t| table(vec![("min_tension", Some(float(t)))])),

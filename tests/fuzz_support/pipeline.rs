@@ -20,7 +20,7 @@ const ADVANCES: u32 = 3;
 const MAX_MESSAGE_CHARS: usize = 1500;
 
 /// Every top-level key of a scene: an error must name one of them.
-const KEYS: [&str; 16] = [
+const KEYS: [&str; 18] = [
     "name",
     "description",
     "nodes",
@@ -33,6 +33,8 @@ const KEYS: [&str; 16] = [
     "outputs",
     "loads",
     "point_masses",
+    "terrain",
+    "collisions",
     "ground",
     "prestress",
     "start",
