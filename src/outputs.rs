@@ -38,9 +38,9 @@ pub enum Quantity {
     SupportReaction(usize, usize),
     /// Total force of terrain shape k on the structure (shape, axis), N.
     TerrainForce(usize, usize),
-    /// Contact points pushing on terrain shape k.
+    /// Contact points penetrating terrain shape k.
     TerrainContacts(usize),
-    /// Pairs of bars pushing on each other.
+    /// Pairs of bars whose capsules overlap.
     Collisions,
     /// The deepest interpenetration of two bars' capsules, m.
     CollisionPenetration,
@@ -274,7 +274,7 @@ fn all_outputs(sim: &Simulation) -> Vec<Output> {
             name: format!("{shape}.contacts"),
             unit: "1",
             description: format!(
-                "number of contact points pushing on {shape} (bar ends and sides)"
+                "number of contact points penetrating {shape} (bar ends and sides)"
             ),
             quantity: Quantity::TerrainContacts(k),
         });
@@ -283,7 +283,7 @@ fn all_outputs(sim: &Simulation) -> Vec<Output> {
         out.push(Output {
             name: "collisions.contacts".into(),
             unit: "1",
-            description: "number of pairs of bars pushing on each other".into(),
+            description: "number of pairs of bars whose capsules overlap".into(),
             quantity: Quantity::Collisions,
         });
         out.push(Output {

@@ -264,3 +264,73 @@ fn a_landing_side_keeps_rk4_fourth_order() {
         assert!(o >= 3.3, "order {o:.2}");
     }
 }
+
+#[test]
+fn a_heightfield_ridge_pushes_straight_up_and_its_border_extends_outward() {
+    use tensegrity_fmu::contact::{Grid, Shape};
+    // Heights 0, 1, 0 along x (a ridge at x = 1), two rows along y.
+    let rows = vec![vec![0.0, 1.0, 0.0], vec![0.0, 1.0, 0.0]];
+    let field = Shape::Heightfield(Grid::new([0.0, 0.0], [1.0, 1.0], &rows));
+    let (phi, n) = field.distance(&Vector3::new(1.0, 0.5, 1.2)).unwrap();
+    assert!((phi - 0.2).abs() < 1e-15, "{phi}");
+    assert_eq!(
+        n,
+        Vector3::z(),
+        "the ridge's normal is the mean of its two slopes"
+    );
+    // Inside a cell the normal is the cell's: slope +1 along x.
+    let (_, n) = field.distance(&Vector3::new(0.5, 0.5, 1.0)).unwrap();
+    assert!(
+        (n - Vector3::new(-1.0, 0.0, 1.0) / 2f64.sqrt()).norm() < 1e-15,
+        "{n}"
+    );
+    // Beyond the border (x = 3 > 2): the border height, flat across it.
+    let (phi, n) = field.distance(&Vector3::new(3.0, 0.5, 0.3)).unwrap();
+    assert!((phi - 0.3).abs() < 1e-15 && n == Vector3::z(), "{phi} {n}");
+}
+
+#[test]
+fn collisions_need_a_bar_with_a_radius() {
+    let text = bar_scene(
+        [0.0, 0.0, 0.0],
+        [1.0, 0.0, 0.0],
+        1.0,
+        0.0,
+        "collisions = { stiffness = 1e4 }\n",
+    );
+    let message = Scene::from_toml_str(&text)
+        .unwrap()
+        .validate()
+        .unwrap_err()
+        .to_string();
+    assert!(
+        message.starts_with("collisions: every bar has radius 0"),
+        "{message}"
+    );
+    assert!(message.contains("bars[].radius"), "{message}");
+}
+
+#[test]
+fn a_capsule_landing_on_the_ground_is_a_located_event() {
+    // [ground] with a 5 cm capsule: the contact starts 5 cm above the plane, where the
+    // node never reaches the plane itself.
+    let ground = "[ground]\nstiffness = 1e4\n[solver]\nmethod = \"rk4\"\nstep_size = 1e-3\n";
+    let mut s = sim(&bar_scene(
+        [0.0, 0.0, 0.2],
+        [0.6, 0.0, 0.4],
+        1.0,
+        0.05,
+        ground,
+    ));
+    let mut lowest = f64::INFINITY;
+    for k in 1..=300 {
+        s.advance_to(1e-3 * f64::from(k)).unwrap();
+        lowest = lowest.min(s.node_position(0).z);
+    }
+    println!("lowest node {lowest} m, {} events", s.stats().events);
+    assert!(
+        lowest > 0.0 && lowest < 0.05,
+        "it lands on its capsule: {lowest}"
+    );
+    assert!(s.stats().events >= 1, "the landing was located");
+}

@@ -67,24 +67,43 @@ impl Grid {
         ]
     }
 
-    /// Height and gradient `(h, ∂h/∂x, ∂h/∂y)` at `(x, y)`; `None` outside the grid.
-    pub fn height(&self, x: f64, y: f64) -> Option<(f64, f64, f64)> {
-        let fx = (x - self.origin[0]) / self.spacing[0];
-        let fy = (y - self.origin[1]) / self.spacing[1];
+    /// Height and gradient `(h, ∂h/∂x, ∂h/∂y)` at `(x, y)`. Beyond the grid the border
+    /// heights extend outward (flat across the border); on a grid line inside, where the
+    /// two cells' slopes differ, the gradient across it is their mean, so that a ridge
+    /// pushes straight up rather than to one side.
+    pub fn height(&self, x: f64, y: f64) -> (f64, f64, f64) {
         let (mx, my) = ((self.nx - 1) as f64, (self.ny - 1) as f64);
-        if !(0.0..=mx).contains(&fx) || !(0.0..=my).contains(&fy) {
-            return None;
-        }
+        let fx = ((x - self.origin[0]) / self.spacing[0]).clamp(0.0, mx);
+        let fy = ((y - self.origin[1]) / self.spacing[1]).clamp(0.0, my);
         let i = (fx.floor() as usize).min(self.nx - 2);
         let j = (fy.floor() as usize).min(self.ny - 2);
         let (u, v) = (fx - i as f64, fy - j as f64);
+        let (h, mut hx, mut hy) = self.cell(i, j, u, v);
+        if u == 0.0 && i > 0 {
+            hx = 0.5 * (hx + self.cell(i - 1, j, 1.0, v).1);
+        }
+        if v == 0.0 && j > 0 {
+            hy = 0.5 * (hy + self.cell(i, j - 1, u, 1.0).2);
+        }
+        // Beyond the border the height no longer changes across it.
+        if !(0.0..=mx).contains(&((x - self.origin[0]) / self.spacing[0])) {
+            hx = 0.0;
+        }
+        if !(0.0..=my).contains(&((y - self.origin[1]) / self.spacing[1])) {
+            hy = 0.0;
+        }
+        (h, hx, hy)
+    }
+
+    /// Height and gradient in cell `(i, j)` at its fractions `(u, v)`.
+    fn cell(&self, i: usize, j: usize, u: f64, v: f64) -> (f64, f64, f64) {
         let at = |i: usize, j: usize| self.heights[j * self.nx + i];
         let (h00, h10, h01, h11) = (at(i, j), at(i + 1, j), at(i, j + 1), at(i + 1, j + 1));
         let h =
             h00 * (1.0 - u) * (1.0 - v) + h10 * u * (1.0 - v) + h01 * (1.0 - u) * v + h11 * u * v;
         let hx = ((h10 - h00) * (1.0 - v) + (h11 - h01) * v) / self.spacing[0];
         let hy = ((h01 - h00) * (1.0 - u) + (h11 - h10) * u) / self.spacing[1];
-        Some((h, hx, hy))
+        (h, hx, hy)
     }
 }
 
@@ -109,8 +128,8 @@ impl Shape {
         }
     }
 
-    /// Signed distance `φ(x)` (m, negative inside) and the outward unit normal there;
-    /// `None` where the shape cannot touch (beside a heightfield's grid).
+    /// Signed distance `φ(x)` (m, negative inside) and the outward unit normal there
+    /// (`None` would be a place the shape cannot touch; every shape here can).
     #[inline]
     pub fn distance(&self, x: &Vector3<f64>) -> Option<(f64, Vector3<f64>)> {
         match self {
@@ -129,7 +148,7 @@ impl Shape {
                 }
             }
             Self::Heightfield(grid) => {
-                let (h, hx, hy) = grid.height(x.x, x.y)?;
+                let (h, hx, hy) = grid.height(x.x, x.y);
                 let n = Vector3::new(-hx, -hy, 1.0).normalize();
                 Some(((x.z - h) * n.z, n))
             }
@@ -147,14 +166,7 @@ impl Shape {
                 let (pa, pb) = (axes.tr_mul(&(a - center)), axes.tr_mul(&(b - center)));
                 (0..3).all(|k| pa[k].min(pb[k]) - r < half[k] && pa[k].max(pb[k]) + r > -half[k])
             }
-            Self::Heightfield(grid) => {
-                let end = grid.end();
-                a.z.min(b.z) - r < grid.top
-                    && a.x.max(b.x) + r >= grid.origin[0]
-                    && a.x.min(b.x) - r <= end[0]
-                    && a.y.max(b.y) + r >= grid.origin[1]
-                    && a.y.min(b.y) - r <= end[1]
-            }
+            Self::Heightfield(grid) => a.z.min(b.z) - r < grid.top,
         }
     }
 

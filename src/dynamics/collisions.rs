@@ -25,7 +25,7 @@ pub struct CollisionScratch {
     near: Vec<(u32, u32)>,
     /// Node positions at the last broad phase (empty: none yet).
     anchor: Vec<Vector3<f64>>,
-    /// Pairs that push.
+    /// Pairs whose capsules overlap.
     pub contacts: u32,
     /// The deepest interpenetration of two capsules, m (0 without contact).
     pub max_penetration: f64,
@@ -119,7 +119,8 @@ fn broad_phase(c: &Collisions, x: &[Vector3<f64>], scratch: &mut CollisionScratc
     near.clear();
     overlapping_pairs(&scratch.boxes, &mut scratch.order, |i, j| {
         let (a, b) = (&c.capsules[i], &c.capsules[j]);
-        if joined(a, b) {
+        let fixed = |c: &Capsule| c.ends.iter().all(Option::is_none);
+        if joined(a, b) || (fixed(a) && fixed(b)) {
             return;
         }
         let (p, q) = (
@@ -137,7 +138,7 @@ fn broad_phase(c: &Collisions, x: &[Vector3<f64>], scratch: &mut CollisionScratc
     scratch.anchor.extend_from_slice(x);
 }
 
-/// Calls `each(i, j, f, s, t, depth)` for every pushing pair at the node positions and
+/// Calls `each(i, j, f, s, t, depth)` for every overlapping pair at the node positions and
 /// velocities `(x, ẋ)`.
 #[inline]
 pub fn for_each_contact(
@@ -193,7 +194,7 @@ pub fn apply(
     scratch.max_penetration = deepest;
 }
 
-/// Stored penalty energy `½ k d²` of every pushing pair at the node positions `x`, J.
+/// Stored penalty energy `½ k d²` of every overlapping pair at the node positions `x`, J.
 pub fn energy(c: &Collisions, x: &[Vector3<f64>], scratch: &mut CollisionScratch) -> f64 {
     let zero = vec![Vector3::zeros(); x.len()];
     let mut total = 0.0;

@@ -14,7 +14,7 @@ use crate::model::terrain::{Capsule, Terrain};
 pub struct ShapeLoad {
     /// Total force on the structure, N.
     pub force: Vector3<f64>,
-    /// Contact points that push.
+    /// Contact points that penetrate it.
     pub contacts: u32,
 }
 

@@ -372,12 +372,18 @@ fn footprint(model: &Model, binding: Binding) -> Footprint {
         },
         Binding::Radius(i) => {
             let grounded = model.ground.is_some();
-            Footprint {
-                ends: model.bars[i]
+            // With collisions, a bar's radius moves whichever bar it touches.
+            let ends = if model.collisions.is_some() {
+                (0..model.coords.n_ends()).collect()
+            } else {
+                model.bars[i]
                     .nodes
                     .iter()
                     .filter_map(|&n| node_end[n])
-                    .collect(),
+                    .collect()
+            };
+            Footprint {
+                ends,
                 energy: true,
                 contact_normal: grounded,
                 contact_total: grounded,

@@ -200,6 +200,13 @@ pub(super) fn validate(scene: &Scene) -> Result<(), SceneError> {
     }
     if let Some(c) = &scene.collisions {
         c.validate()?;
+        if scene.bars.iter().all(|b| b.radius == 0.0) {
+            return Err(SceneError::invalid(
+                "collisions",
+                "every bar has radius 0, so no two bars can ever touch: give the bars a \
+                 bars[].radius",
+            ));
+        }
     }
     super::limits::check(scene)?;
     if let Some(vs) = &scene.velocities {

@@ -135,11 +135,12 @@ impl Events {
                     }
                 }
                 ForceEffect::GroundContact(ground) => {
-                    for &(_, end) in &ground.nodes {
+                    // A node touches as a sphere of its widest bar's radius.
+                    for (&(_, end), &r) in ground.nodes.iter().zip(&ground.radii) {
                         switches.push(Switch::Ground {
                             end,
                             normal: ground.normal,
-                            height: ground.height,
+                            height: ground.height + r,
                         });
                     }
                 }

@@ -139,13 +139,15 @@ pub(super) fn parameters(model: &Model, vars: &mut Vec<Variable>) {
         ));
     }
     // A radius matters once something touches the bars' capsules.
-    let touched = model.terrain.is_some() || model.bars.iter().any(|b| b.radius > 0.0);
+    let touched = model.terrain.is_some()
+        || model.collisions.is_some()
+        || model.bars.iter().any(|b| b.radius > 0.0);
     for (i, bar) in model.bars.iter().enumerate().filter(|_| touched) {
         vars.push(parameter(
             format!("bar[{}].radius", i + 1),
             Some("m"),
             format!(
-                "radius of bar {}'s capsule, where it touches terrain",
+                "radius of bar {}'s capsule, where it touches the ground, terrain and other bars",
                 i + 1
             ),
             bar.radius,
