@@ -1,7 +1,6 @@
 //! The terrain as the step sees it: each shape with its penalty law, and each bar as a
 //! capsule between the nodes it joins.
 
-use super::effects::Target;
 use crate::contact::{Grid, Penalty, Shape};
 use crate::scene::{TerrainKind, TerrainSpec};
 
@@ -12,8 +11,8 @@ pub struct Capsule {
     pub bar: usize,
     /// Its nodes (0-based).
     pub nodes: [usize; 2],
-    /// The bar ends that carry them.
-    pub ends: [Target; 2],
+    /// The bar ends that carry them (`None` at a pinned node: its pin takes the force).
+    pub ends: [Option<usize>; 2],
     /// Radius, m.
     pub radius: f64,
 }

@@ -9,175 +9,22 @@
 
 use nalgebra::Vector3;
 
-use crate::contact::Penalty;
 use crate::dynamics::{self, Inputs, Workspace};
 use crate::model::{CableLaw, Model};
 use crate::scene::LoadSpec;
 
-/// Where a rate comes from.
-#[derive(Debug, Clone, PartialEq)]
-pub enum Cause {
-    /// Cables carrying most of the mode's stiffness.
-    Cables {
-        /// Their indices (0-based), largest term first.
-        cables: Vec<usize>,
-        /// Their share of the mode's stiffness, 0–1.
-        share: f64,
-        /// Every cable at least as stiff as the weakest of them (the ones a fix softens).
-        family: Vec<usize>,
-        /// The family's share of the mode's stiffness, 0–1.
-        family_share: f64,
-    },
-    /// The ground's penalty oscillator `√(k w) + c w`.
-    GroundPenalty,
-    /// Ground friction, viscous below the slip velocity: `μ W w / v_s`.
-    Friction,
-    /// Terrain shape k's penalty oscillator (0-based), as the ground's.
-    TerrainPenalty(usize),
-    /// Terrain shape k's friction, viscous below its slip velocity, as the ground's.
-    TerrainFriction(usize),
-    /// Bar–bar contact's penalty oscillator, as the ground's.
-    CollisionPenalty,
-    /// Bar–bar friction, viscous below its slip velocity, as the ground's.
-    CollisionFriction,
-    /// The structure's fastest mode with no cable or contact dominating its stiffness
-    /// (bars' constraint forces, many comparable terms).
-    Structure,
-    /// A damped cable's extension decaying at `c (w_a + w_b)` (index 0-based).
-    CableDamping(usize),
-    /// Gravity moving the structure over its size: `√(|a| / L)`.
-    Gravity,
-    /// Scripted load `k` (0-based) moving its node over the structure's size: `√(|F| w / L)`.
-    Load(usize),
-    /// Forces unbalanced at the start (a geometry out of equilibrium) moving the structure
-    /// over its size: `√(|a| / L)`.
-    Unbalanced,
-}
-
-/// A rate, 1/s (an angular frequency for an oscillation), with its cause and the node
-/// whose mass it moves (0-based; the most compliant contact end for the contact bounds).
-#[derive(Debug, Clone, PartialEq)]
-pub struct Rate {
-    /// ω, 1/s.
-    pub omega: f64,
-    /// What sets it.
-    pub cause: Cause,
-    /// The node that moves most in it, if known.
-    pub node: Option<usize>,
-}
+pub use super::contact_rates::contact_rates;
+use super::contact_rates::{
+    collision_compliance, contact_compliance, raise_slip, soften_penalty, terrain_compliance,
+    terrain_laws, weight,
+};
+pub use super::rate::{num, Cause, Rate};
 
 /// A cable counts among the mode's stiff ones when its term is at least this fraction of
 /// the largest.
 const GROUP: f64 = 0.5;
 /// Cables named one by one before "and N more".
 const NAMED: usize = 3;
-
-/// The ground's two rates: the penalty oscillator and the viscous friction (0 without a
-/// ground or friction), at the most compliant contact end.
-pub fn contact_rates(model: &Model) -> Vec<Rate> {
-    let mut rates = Vec::new();
-    let mut push = |law: Penalty, w: f64, node, causes: [Cause; 2]| {
-        let [penalty, friction] = causes;
-        rates.push(Rate {
-            omega: (law.stiffness * w).sqrt() + law.damping * w,
-            cause: penalty,
-            node,
-        });
-        rates.push(Rate {
-            omega: law.friction * weight(model) * w / law.slip_velocity,
-            cause: friction,
-            node,
-        });
-    };
-    if let Some(ground) = &model.ground {
-        let (w, node) = contact_compliance(model);
-        push(
-            ground.penalty(),
-            w,
-            node,
-            [Cause::GroundPenalty, Cause::Friction],
-        );
-    }
-    if model.terrain.is_some() {
-        let (w, node) = terrain_compliance(model);
-        for (k, law) in terrain_laws(model).enumerate() {
-            push(
-                law,
-                w,
-                node,
-                [Cause::TerrainPenalty(k), Cause::TerrainFriction(k)],
-            );
-        }
-    }
-    if let Some(c) = &model.collisions {
-        let (w, node) = collision_compliance(model);
-        push(
-            c.law,
-            w,
-            node,
-            [Cause::CollisionPenalty, Cause::CollisionFriction],
-        );
-    }
-    rates
-}
-
-/// The largest end compliance of any moving bar, 1/kg, and its node: two bars that touch
-/// move apart with at most twice it.
-fn collision_compliance(model: &Model) -> (f64, Option<usize>) {
-    (0..model.coords.n_ends())
-        .filter(|&e| !model.coords.static_bar[e / 2])
-        .map(|e| {
-            (
-                2.0 * model.inertia[e / 2].w[e % 2][e % 2],
-                Some(model.coords.end_node[e]),
-            )
-        })
-        .fold((0.0, None), |best, c| if c.0 > best.0 { c } else { best })
-}
-
-/// The terrain shapes' contact laws, in scene order.
-fn terrain_laws(model: &Model) -> impl Iterator<Item = Penalty> + '_ {
-    model
-        .terrain
-        .iter()
-        .flat_map(|t| t.shapes.iter().map(|(_, law)| *law))
-}
-
-/// The largest end compliance among the bars that touch terrain, 1/kg, and its node: a
-/// point along a bar is never more compliant than the bar's ends.
-fn terrain_compliance(model: &Model) -> (f64, Option<usize>) {
-    let Some(terrain) = &model.terrain else {
-        return (0.0, None);
-    };
-    terrain
-        .capsules
-        .iter()
-        .flat_map(|c| (0..2).filter_map(move |i| c.ends[i].map(|e| (e, c.nodes[i]))))
-        .map(|(e, n)| (model.inertia[e / 2].w[e % 2][e % 2], Some(n)))
-        .fold((0.0, None), |best, c| if c.0 > best.0 { c } else { best })
-}
-
-/// The largest end compliance `w` among the contact points, 1/kg, and its node.
-fn contact_compliance(model: &Model) -> (f64, Option<usize>) {
-    let Some(ground) = &model.ground else {
-        return (0.0, None);
-    };
-    ground
-        .nodes
-        .iter()
-        .map(|&(n, e)| (model.inertia[e / 2].w[e % 2][e % 2], Some(n)))
-        .fold((0.0, None), |best, c| if c.0 > best.0 { c } else { best })
-}
-
-/// The whole weight, N.
-fn weight(model: &Model) -> f64 {
-    model.gravity.map_or(0.0, |g| {
-        g.norm()
-            * (0..model.coords.n_ends())
-                .map(|e| model.end_mass(e))
-                .sum::<f64>()
-    })
-}
 
 /// Names what makes the mode with node displacements `dx` (per node, any scale) stiff, at
 /// the positions `x`.
@@ -481,20 +328,6 @@ fn node_mass(model: &Model, n: usize) -> String {
     text + ")"
 }
 
-/// Four significant digits, plainly between 1e-3 and 1e5 (58.86, 0.01, 100), else as
-/// 1e8 or 5.292e6.
-pub fn num(x: f64) -> String {
-    if x == 0.0 || !x.is_finite() {
-        return format!("{x}");
-    }
-    let rounded: f64 = format!("{x:.3e}").parse().unwrap_or(x);
-    if (1e-3..1e5).contains(&rounded.abs()) {
-        format!("{rounded}")
-    } else {
-        format!("{rounded:e}")
-    }
-}
-
 /// "cables[3] (elastic, stiffness 1e8 N/m)", several as "cables[3], cables[5] and 4 more
 /// (elastic, stiffness 1e8 N/m)".
 fn cable_list(model: &Model, inputs: &Inputs, cables: &[usize]) -> String {
@@ -593,16 +426,6 @@ fn soften(model: &Model, inputs: &Inputs, cables: &[usize], factor: f64) -> Stri
     parts.join(" and ")
 }
 
-/// `x` rounded up to two significant digits (0.0706 → 0.071).
-fn round_up(x: f64) -> f64 {
-    if !(x.is_finite() && x > 0.0) {
-        return x;
-    }
-    let unit = 10f64.powi(x.log10().floor() as i32 - 1);
-    let y = (x / unit * (1.0 - 1e-12)).ceil() * unit;
-    num(y).parse().unwrap_or(y)
-}
-
 /// Node positions and node displacements per unit of `dq` about `q0`, by a difference.
 pub fn node_displacements(
     model: &Model,
@@ -619,33 +442,4 @@ pub fn node_displacements(
     let x = ws.node_pos.clone();
     let dx = moved.iter().zip(&x).map(|(m, p)| (m - p) / eps).collect();
     (x, dx)
-}
-
-/// The penalty settings of `key` (`ground`, `terrain[2]`) that bring its oscillator's rate
-/// `√(k w) + c w` down to `target`.
-fn soften_penalty(key: &str, law: Penalty, w: f64, target: f64) -> String {
-    let damped = law.damping * w;
-    if damped < 0.5 * target {
-        format!(
-            "{key}.stiffness ≤ {} N/m (a softer contact penalty)",
-            num((target - damped).powi(2) / w)
-        )
-    } else {
-        format!(
-            "{key}.stiffness ≤ {} N/m with {key}.damping ≤ {} N·s/m",
-            num((0.5 * target).powi(2) / w),
-            num(0.5 * target / w)
-        )
-    }
-}
-
-/// Raising the slip velocity `key` (now `slip`) so that the viscous friction's rate falls
-/// from `omega` to `target`.
-fn raise_slip(key: &str, slip: f64, omega: f64, target: f64) -> String {
-    let raised = round_up(slip * omega / target);
-    format!(
-        "raise {key} to ≥ {} m/s (the rate falls as 1/slip_velocity: ÷ {})",
-        num(raised),
-        num(raised / slip)
-    )
 }

@@ -11,7 +11,9 @@ use crate::integrator::{Integrator, Rhs};
 use crate::model::Model;
 
 mod cause;
+mod contact_rates;
 mod events;
+mod rate;
 mod stability;
 mod stepping;
 mod work;
