@@ -59,14 +59,6 @@ impl Grid {
         }
     }
 
-    /// The far corner `(x, y)` of the grid, m.
-    pub fn end(&self) -> [f64; 2] {
-        [
-            self.origin[0] + (self.nx - 1) as f64 * self.spacing[0],
-            self.origin[1] + (self.ny - 1) as f64 * self.spacing[1],
-        ]
-    }
-
     /// Height and gradient `(h, ∂h/∂x, ∂h/∂y)` at `(x, y)`. Beyond the grid the border
     /// heights extend outward (flat across the border); on a grid line inside, where the
     /// two cells' slopes differ, the gradient across it is their mean, so that a ridge

@@ -153,20 +153,33 @@ fn ground_field(g: &mut GroundSpec, field: GroundField) -> &mut f64 {
 
 /// The scene value behind a terrain parameter.
 fn terrain_field(t: &mut TerrainSpec, field: ContactField) -> &mut f64 {
-    match field {
-        ContactField::Stiffness => &mut t.stiffness,
-        ContactField::Damping => &mut t.damping,
-        ContactField::Friction => &mut t.friction,
-        ContactField::SlipVelocity => &mut t.slip_velocity,
-    }
+    let law = [
+        &mut t.stiffness,
+        &mut t.damping,
+        &mut t.friction,
+        &mut t.slip_velocity,
+    ];
+    law_field(law, field)
 }
 
 /// The scene value behind a bar–bar contact parameter.
 fn collision_field(c: &mut CollisionSpec, field: ContactField) -> &mut f64 {
+    let law = [
+        &mut c.stiffness,
+        &mut c.damping,
+        &mut c.friction,
+        &mut c.slip_velocity,
+    ];
+    law_field(law, field)
+}
+
+/// One of a contact law's `[stiffness, damping, friction, slip_velocity]`.
+fn law_field(law: [&mut f64; 4], field: ContactField) -> &mut f64 {
+    let [stiffness, damping, friction, slip_velocity] = law;
     match field {
-        ContactField::Stiffness => &mut c.stiffness,
-        ContactField::Damping => &mut c.damping,
-        ContactField::Friction => &mut c.friction,
-        ContactField::SlipVelocity => &mut c.slip_velocity,
+        ContactField::Stiffness => stiffness,
+        ContactField::Damping => damping,
+        ContactField::Friction => friction,
+        ContactField::SlipVelocity => slip_velocity,
     }
 }
