@@ -64,7 +64,7 @@ fn serialized(i: &Instance) -> Vec<u8> {
 
 /// Where each field of a serialized state lies: this test's own reading of the layout
 /// (magic, version, GUID, mode, times, stop time, arrays with u64 lengths, flags,
-/// parameters, the next step, carried values, SHA-256).
+/// parameters, the next step, carried values, friction grips, SHA-256).
 #[derive(Debug, Clone, Copy)]
 struct Layout {
     mode: usize,
@@ -80,6 +80,7 @@ struct Layout {
     parameters: (usize, usize),
     h_next: usize,
     carried: (usize, usize),
+    grips: (usize, usize),
 }
 
 impl Layout {
@@ -108,6 +109,7 @@ impl Layout {
         let h_next = at;
         at += 8;
         let carried = array(&mut at, 8);
+        let grips = array(&mut at, 8);
         assert_eq!(
             at + 32,
             b.len(),
@@ -127,6 +129,7 @@ impl Layout {
             parameters,
             h_next,
             carried,
+            grips,
         }
     }
 }
@@ -474,4 +477,45 @@ fn an_instance_refusing_a_state_carries_on_as_if_never_asked() {
     }
     assert_eq!(i.simulation().state(), twin.simulation().state());
     assert_eq!(i.mode(), Mode::StepComplete);
+}
+
+#[test]
+fn friction_grips_travel_with_the_state_and_forged_ones_are_refused() {
+    // At 0.6 s the icosahedron has landed across its step: some ends stick, some slide.
+    let steps = (0.6 / H) as usize;
+    let mut i = running("icosahedron-step", 2, true, steps);
+    let b = serialized(&i);
+    let l = Layout::of(&b);
+    let modes: Vec<f64> = (0..l.grips.1 / 4)
+        .map(|k| f64_at(&b, element(l.grips, 4 * k, 8)))
+        .collect();
+    let count = |mode: f64| modes.iter().filter(|&&m| m == mode).count();
+    let (held, sliding) = (count(1.0), count(2.0));
+    println!("{} grips, {held} sticking, {sliding} sliding", modes.len());
+    assert_eq!(modes.len(), 6 * 2 * 2, "one grip per bar end and shape");
+    assert!(
+        held >= 1 && sliding >= 1,
+        "saved while ends stick and slide: {modes:?}"
+    );
+    let at = element(l.grips, 0, 8);
+    let mut forged = b.clone();
+    put_f64(&mut forged, at, 3.0);
+    assert_names(
+        &refusal(&mut i, &resealed(forged)),
+        &["friction grip 1 has mode 3 (allowed: 0 free, 1 stick, 2 slip)"],
+    );
+    assert_names(
+        &refusal(&mut i, &resealed(resized(&b, l.grips, 8, false))),
+        &["corrupt state: 95 friction-grip values, not four per grip"],
+    );
+    // Restored into a twin, the state carries on exactly as the original.
+    let mut twin = running("icosahedron-step", 2, true, 0);
+    twin.set_state(&twin.deserialize_state(&b).unwrap())
+        .unwrap();
+    for k in steps..steps + 200 {
+        i.do_step(k as f64 * H, H).unwrap();
+        twin.do_step(k as f64 * H, H).unwrap();
+    }
+    assert_eq!(i.simulation().state(), twin.simulation().state());
+    assert_eq!(i.simulation().grips(), twin.simulation().grips());
 }

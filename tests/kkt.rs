@@ -87,6 +87,7 @@ fn check_energy_gradient(scene: Scene, seed: u64) {
         force_density: sim.inputs.force_density.clone(),
         node_force: vec![Vector3::zeros(); model.force_inputs.len()],
         rest_length: sim.inputs.rest_length.clone(),
+        grip: sim.inputs.grip.clone(),
     };
     let mut ws = Workspace::new(model);
     kinematics(model, q, &vec![0.0; half], &mut ws);

@@ -8,7 +8,7 @@ mod stress_support;
 
 use stress_support::*;
 use tensegrity_fmu::integrator::Method;
-use tensegrity_fmu::scene::{BarSpec, Scene, TerrainKind, TerrainSpec};
+use tensegrity_fmu::scene::{BarSpec, FrictionModel, Scene, TerrainKind, TerrainSpec};
 
 /// Check: the icosahedron with 2 cm capsules dropped across the edge of a 15 cm box step
 /// onto the ground (fmu/scenes/icosahedron-step.toml), 2 s, with rk4 at 0.1 ms (inside
@@ -85,6 +85,7 @@ fn bar_resting_on_two_supports() {
         damping: 400.0,
         friction: 0.5,
         slip_velocity: 0.01,
+        friction_model: FrictionModel::default(),
     };
     let mut scene = bare(
         "bar_on_two_supports",

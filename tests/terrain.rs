@@ -2,15 +2,11 @@
 //! a box's edge as the lever says, a body sliding down a steep plane, and a heightfield
 //! that is a plane giving the plane's trajectory.
 
+mod terrain_support;
+
 use nalgebra::Vector3;
-use tensegrity_fmu::{Model, Scene, Simulation};
-
-const G: f64 = 9.81;
-
-fn sim(toml: &str) -> Simulation {
-    let scene = Scene::from_toml_str(toml).unwrap();
-    Simulation::new(Model::new(&scene).unwrap())
-}
+use tensegrity_fmu::{Scene, Simulation};
+use terrain_support::{prism_on_slope, sim, G};
 
 /// A single bar of mass `m` from `a` to `b` with radius `r` and gravity, then `terrain`.
 fn bar_scene(a: [f64; 3], b: [f64; 3], m: f64, r: f64, rest: &str) -> String {
@@ -115,53 +111,10 @@ fn a_bar_on_a_box_edge_tips_the_way_the_lever_says() {
     assert!((short.node_position(0).z - z).abs() < 1e-4);
 }
 
-/// A one-stage prism (3 bars of 1 kg, elastic cables) with its base on the plane through
-/// the origin of outward normal `n = (−sin θ, 0, cos θ)`, and that plane as terrain
-/// (`kind` plane, or a heightfield with the same surface).
-fn prism_on_slope(theta: f64, mu: f64, heightfield: bool) -> Simulation {
-    let mut scene = tensegrity_fmu::scene::tower_scene(1, Some(2000.0), "prism");
-    scene.fixed.clear();
-    scene.force_inputs.clear();
-    scene.gravity = Some([0.0, 0.0, -G]);
-    let (s, c) = theta.sin_cos();
-    let (k, depth) = (1e5, 3.0 * G / 3.0 / 1e5);
-    for p in &mut scene.nodes {
-        // Rotate about y by −θ so that the base lies in the slope, sunk to its static depth.
-        let (x, z) = (p[0], p[2] - depth);
-        *p = [c * x - s * z, p[1], s * x + c * z];
-    }
-    let shape = if heightfield {
-        // h(x, y) = x tan θ on a grid wide enough for the whole run.
-        let (nx, ny, dx) = (41, 9, 0.25);
-        let rows: Vec<String> = (0..ny)
-            .map(|_| {
-                let row: Vec<String> = (0..nx)
-                    .map(|i| format!("{:?}", (-8.0 + i as f64 * dx) * theta.tan()))
-                    .collect();
-                format!("[{}]", row.join(", "))
-            })
-            .collect();
-        format!(
-            "kind = \"heightfield\"\norigin = [-8.0, -1.0]\nspacing = [{dx}, 0.25]\nheights = [{}]\n",
-            rows.join(", ")
-        )
-    } else {
-        format!(
-            "kind = \"plane\"\npoint = [0.0, 0.0, 0.0]\nnormal = [{:?}, 0.0, {c:?}]\n",
-            -s
-        )
-    };
-    let text = format!(
-        "{}\n[[terrain]]\n{shape}stiffness = {k}\ndamping = 300.0\nfriction = {mu}\n",
-        scene.to_toml_string()
-    );
-    sim(&text)
-}
-
 #[test]
 fn a_prism_slides_down_a_steep_plane_at_g_sin_minus_mu_cos() {
     let (theta, mu) = (30f64.to_radians(), 0.3);
-    let mut s = prism_on_slope(theta, mu, false);
+    let mut s = prism_on_slope(theta, mu, false, "");
     let mass = 3.0;
     let downhill = Vector3::new(-theta.cos(), 0.0, -theta.sin());
     let speed = |s: &mut Simulation| {
@@ -185,8 +138,8 @@ fn a_prism_slides_down_a_steep_plane_at_g_sin_minus_mu_cos() {
 #[test]
 fn a_heightfield_that_is_a_plane_gives_the_plane_s_trajectory() {
     let (theta, mu) = (20f64.to_radians(), 0.2);
-    let mut plane = prism_on_slope(theta, mu, false);
-    let mut field = prism_on_slope(theta, mu, true);
+    let mut plane = prism_on_slope(theta, mu, false, "");
+    let mut field = prism_on_slope(theta, mu, true, "");
     let mut worst: f64 = 0.0;
     for step in 1..=10 {
         let t = 0.1 * f64::from(step);

@@ -6,7 +6,7 @@
 
 use nalgebra::Vector3;
 use tensegrity_fmu::contact::capsule::KINK_SLACK;
-use tensegrity_fmu::contact::{Grid, Penalty, Shape};
+use tensegrity_fmu::contact::{Grid, Grip, Penalty, Shape};
 use tensegrity_fmu::dynamics::terrain::{apply, capsule_forces, TerrainSink};
 use tensegrity_fmu::model::terrain::{Capsule, Terrain};
 use tensegrity_fmu::scene::Scene;
@@ -203,12 +203,19 @@ fn end_forces_have_the_contacts_resultant_and_moment() {
                 radius: rng.range(0.0, 0.08),
             });
         }
-        let terrain = Terrain { shapes, capsules };
+        // Regularised friction: the forces below are recomputed with the penalty law.
+        let sticks = vec![false; shapes.len()];
+        let terrain = Terrain {
+            shapes,
+            capsules,
+            sticks,
+        };
+        let grips = vec![Grip::Free; terrain.grips()];
         let mut sink = Ends {
             force: vec![Vector3::zeros(); 2 * bars],
             shapes: Vector3::zeros(),
         };
-        apply(&terrain, (&x, &v), &mut sink);
+        apply(&terrain, &grips, (&x, &v), &mut sink);
 
         let mut total = Vector3::zeros();
         for cap in &terrain.capsules {
@@ -222,6 +229,7 @@ fn end_forces_have_the_contacts_resultant_and_moment() {
                 [&a, &b],
                 [&v[na], &v[nb]],
                 cap.radius,
+                &grips[..2 * terrain.shapes.len()],
                 |_, s, f| {
                     force += f;
                     moment += (a + (b - a) * s - p).cross(&f);

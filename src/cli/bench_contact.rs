@@ -16,7 +16,8 @@ use tensegrity_fmu::contact::segments::{capsule_bounds, overlapping_pairs};
 use tensegrity_fmu::dynamics::collisions::{self, CollisionScratch};
 use tensegrity_fmu::integrator::Method;
 use tensegrity_fmu::scene::{
-    builtin, tower_with_rest_lengths, CollisionSpec, Scene, SolverSpec, TerrainKind, TerrainSpec,
+    builtin, tower_with_rest_lengths, CollisionSpec, FrictionModel, Scene, SolverSpec, TerrainKind,
+    TerrainSpec,
 };
 use tensegrity_fmu::{Model, Simulation};
 
@@ -129,6 +130,7 @@ fn shape(kind: TerrainKind) -> TerrainSpec {
         damping: LAW[1],
         friction: LAW[2],
         slip_velocity: 0.5,
+        friction_model: FrictionModel::default(),
     }
 }
 

@@ -33,6 +33,8 @@ pub struct Contact {
     pub depth: f64,
     /// The shape's outward unit normal there.
     pub normal: Vector3<f64>,
+    /// The end (0 at `a`, 1 at `b`) whose sphere this is; `None` on the side.
+    pub end: Option<usize>,
 }
 
 /// Depth `r − φ(x)` and normal at `x`, if the shape can touch there.
@@ -62,6 +64,7 @@ pub fn capsule_contacts(
                     s,
                     depth: d,
                     normal,
+                    end: Some(i),
                 });
             }
         }
@@ -74,6 +77,7 @@ pub fn capsule_contacts(
                     s,
                     depth: excess,
                     normal,
+                    end: None,
                 });
             }
         }

@@ -147,7 +147,7 @@ pub(super) fn apply(
             }
             ForceEffect::Terrain(terrain) => {
                 sink.shape_loads().fill(ShapeLoad::default());
-                super::terrain::apply(terrain, nodes, &mut IntoSink(sink));
+                super::terrain::apply(terrain, &inputs.grip, nodes, &mut IntoSink(sink));
             }
             ForceEffect::Collisions(collisions) => {
                 // The scratch is taken out while the sink receives the forces.

@@ -59,7 +59,7 @@ pub fn potential(model: &Model, inputs: &Inputs, ws: &Workspace) -> f64 {
         }
     }
     if let Some(terrain) = &model.terrain {
-        v += super::terrain::energy(terrain, &ws.node_pos);
+        v += super::terrain::energy(terrain, &inputs.grip, &ws.node_pos, &ws.node_vel);
     }
     if let Some(c) = &model.collisions {
         let mut scratch = super::collisions::CollisionScratch::new(c.capsules.len());

@@ -19,6 +19,7 @@ use std::sync::Arc;
 
 use nalgebra::Vector3;
 
+use crate::contact::Grip;
 use crate::model::reactions::Reactions;
 use crate::model::{CableLaw, Model};
 pub use bar_response::bar_response;
@@ -35,6 +36,9 @@ pub struct Inputs {
     pub node_force: Vec<Vector3<f64>>,
     /// Commanded rest length per rest-length controlled cable, m (clamped at ≥ 0 when used).
     pub rest_length: Vec<f64>,
+    /// The friction state of every terrain grip ([`crate::model::terrain::Terrain::grip`]):
+    /// held over a step like the inputs, moved only between steps (see `sim::grip`).
+    pub grip: Vec<Grip>,
 }
 
 impl Inputs {
@@ -44,6 +48,7 @@ impl Inputs {
             force_density: model.controlled_start.clone(),
             node_force: vec![Vector3::zeros(); model.force_inputs.len()],
             rest_length: model.reeled_start.clone(),
+            grip: vec![Grip::Free; model.terrain.as_ref().map_or(0, |t| t.grips())],
         }
     }
 
@@ -52,6 +57,7 @@ impl Inputs {
         self.force_density.copy_from_slice(&other.force_density);
         self.node_force.copy_from_slice(&other.node_force);
         self.rest_length.copy_from_slice(&other.rest_length);
+        self.grip.copy_from_slice(&other.grip);
     }
 }
 

@@ -285,11 +285,12 @@ impl EndDerivatives {
                 }
             }
             ForceEffect::Terrain(terrain) => {
-                for cap in &terrain.capsules {
+                for (ci, cap) in terrain.capsules.iter().enumerate() {
                     let [a, b] = cap.nodes;
                     let x = [ws.node_pos[a], ws.node_pos[b]];
                     let v = [ws.node_vel[a], ws.node_vel[b]];
-                    let d = super::terrain::capsule_derivatives(terrain, x, v, cap.radius);
+                    let grips = super::terrain::capsule_grips(terrain, &inputs.grip, ci);
+                    let d = super::terrain::capsule_derivatives(terrain, x, v, cap.radius, grips);
                     for (m, blocks) in [(&mut self.position, &d[0]), (&mut self.velocity, &d[1])] {
                         for (row, row_blocks) in cap.ends.iter().zip(blocks) {
                             for (col, block) in cap.ends.iter().zip(row_blocks) {

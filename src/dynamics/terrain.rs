@@ -2,11 +2,12 @@
 //! contact's penalty force split onto the bar's two ends. A force `f` at `a + s (b − a)`
 //! is the generalized force `(1 − s) f` on end a and `s f` on end b: the same resultant
 //! and the same moment about any point, and no work on the bar's length (see
-//! docs/design.md).
+//! docs/design.md). The ends of a shape whose friction sticks follow their grips
+//! ([`crate::contact::grip`]).
 
 use nalgebra::{Matrix3, Vector3};
 
-use crate::contact::capsule_contacts;
+use crate::contact::{capsule_contacts, grip, Grip};
 use crate::model::terrain::{Capsule, Terrain};
 
 /// What one shape does to the structure: its total force and how many points touch it.
@@ -19,21 +20,41 @@ pub struct ShapeLoad {
 }
 
 /// Calls `each(shape, s, f)` for every contact force of one capsule with its end nodes
-/// at `x` moving with `v`.
+/// at `x` moving with `v`, its ends held by `grips` (the capsule's, shape by shape).
 #[inline]
 pub fn capsule_forces(
     terrain: &Terrain,
     x: [&Vector3<f64>; 2],
     v: [&Vector3<f64>; 2],
     radius: f64,
+    grips: &[Grip],
     mut each: impl FnMut(usize, f64, Vector3<f64>),
 ) {
     for (k, (shape, law)) in terrain.shapes.iter().enumerate() {
+        let sticks = terrain.sticks[k];
         capsule_contacts(shape, x[0], x[1], radius, |c| {
-            let vel = v[0] + (v[1] - v[0]) * c.s;
-            each(k, c.s, law.force(c.depth, &c.normal, &vel));
+            let f = match c.end {
+                Some(i) if sticks => {
+                    let touch = grip::Touch {
+                        depth: c.depth,
+                        normal: &c.normal,
+                        x: x[i],
+                        v: v[i],
+                    };
+                    grip::force(law, &touch, grips[2 * k + i])
+                }
+                _ => law.force(c.depth, &c.normal, &(v[0] + (v[1] - v[0]) * c.s)),
+            };
+            each(k, c.s, f);
         });
     }
+}
+
+/// The grips of capsule `c` (its ends on every shape, shape by shape).
+#[inline]
+pub fn capsule_grips<'g>(terrain: &Terrain, grips: &'g [Grip], c: usize) -> &'g [Grip] {
+    let n = 2 * terrain.shapes.len();
+    &grips[c * n..(c + 1) * n]
 }
 
 /// Where one capsule's contact forces go.
@@ -48,10 +69,11 @@ pub trait TerrainSink {
 #[inline]
 pub fn apply(
     terrain: &Terrain,
+    grips: &[Grip],
     nodes: (&[Vector3<f64>], &[Vector3<f64>]),
     sink: &mut impl TerrainSink,
 ) {
-    for cap in &terrain.capsules {
+    for (c, cap) in terrain.capsules.iter().enumerate() {
         let Capsule {
             nodes: [a, b],
             ends,
@@ -59,7 +81,8 @@ pub fn apply(
             ..
         } = *cap;
         let (x, v) = ([&nodes.0[a], &nodes.0[b]], [&nodes.1[a], &nodes.1[b]]);
-        capsule_forces(terrain, x, v, radius, |k, s, f| {
+        let grips = capsule_grips(terrain, grips, c);
+        capsule_forces(terrain, x, v, radius, grips, |k, s, f| {
             if let Some(e) = ends[0] {
                 sink.add(e, f * (1.0 - s));
             }
@@ -79,6 +102,7 @@ pub fn capsule_derivatives(
     x: [Vector3<f64>; 2],
     v: [Vector3<f64>; 2],
     radius: f64,
+    grips: &[Grip],
 ) -> [[[Matrix3<f64>; 2]; 2]; 2] {
     let forces = |x: &[Vector3<f64>; 2], v: &[Vector3<f64>; 2]| {
         let mut f = [Vector3::zeros(); 2];
@@ -87,6 +111,7 @@ pub fn capsule_derivatives(
             [&x[0], &x[1]],
             [&v[0], &v[1]],
             radius,
+            grips,
             |_, s, g| {
                 f[0] += g * (1.0 - s);
                 f[1] += g * s;
@@ -123,14 +148,26 @@ pub fn capsule_derivatives(
     out
 }
 
-/// Stored penalty energy `½ k d²` of every contact point at the node positions `x`, J.
-pub fn energy(terrain: &Terrain, x: &[Vector3<f64>]) -> f64 {
+/// Stored penalty energy `½ k d²` of every contact point at the node positions `x`, and
+/// that of the sticking springs at the velocities `ẋ`, J.
+pub fn energy(terrain: &Terrain, grips: &[Grip], x: &[Vector3<f64>], v: &[Vector3<f64>]) -> f64 {
     let mut total = 0.0;
-    for cap in &terrain.capsules {
+    for (ci, cap) in terrain.capsules.iter().enumerate() {
         let [a, b] = cap.nodes;
-        for (shape, law) in &terrain.shapes {
+        let grips = capsule_grips(terrain, grips, ci);
+        for (k, (shape, law)) in terrain.shapes.iter().enumerate() {
             capsule_contacts(shape, &x[a], &x[b], cap.radius, |c| {
                 total += 0.5 * law.stiffness * c.depth * c.depth;
+                if let Some(i) = c.end {
+                    let n = cap.nodes[i];
+                    let touch = grip::Touch {
+                        depth: c.depth,
+                        normal: &c.normal,
+                        x: &x[n],
+                        v: &v[n],
+                    };
+                    total += grip::energy(law, &touch, grips[2 * k + i]);
+                }
             });
         }
     }

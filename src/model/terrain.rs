@@ -2,7 +2,7 @@
 //! capsule between the nodes it joins.
 
 use crate::contact::{Grid, Penalty, Shape};
-use crate::scene::{TerrainKind, TerrainSpec};
+use crate::scene::{FrictionModel, TerrainKind, TerrainSpec};
 
 /// A bar's capsule.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -24,6 +24,8 @@ pub struct Terrain {
     pub shapes: Vec<(Shape, Penalty)>,
     /// Every bar whose capsule can move (a bar with both ends pinned never touches).
     pub capsules: Vec<Capsule>,
+    /// Per shape, whether friction at the capsules' ends sticks (a grip per end).
+    pub sticks: Vec<bool>,
 }
 
 impl Terrain {
@@ -41,7 +43,26 @@ impl Terrain {
                 (shape(t), penalty)
             })
             .collect();
-        Self { shapes, capsules }
+        let sticks = specs
+            .iter()
+            .map(|t| t.friction_model == FrictionModel::StickSlip)
+            .collect();
+        Self {
+            shapes,
+            capsules,
+            sticks,
+        }
+    }
+
+    /// The number of grips (friction states): one per capsule end and shape.
+    pub fn grips(&self) -> usize {
+        2 * self.capsules.len() * self.shapes.len()
+    }
+
+    /// The grip of capsule `c`'s end `end` on shape `shape`.
+    #[inline]
+    pub fn grip(&self, c: usize, shape: usize, end: usize) -> usize {
+        2 * (c * self.shapes.len() + shape) + end
     }
 }
 

@@ -15,7 +15,7 @@ pub use builtin::{
     BUILTIN_DEFAULT,
 };
 pub use extreme::{extreme_scenes, Extreme};
-pub use terrain::{CollisionSpec, TerrainKind, TerrainSpec, MAX_HEIGHTS};
+pub use terrain::{CollisionSpec, FrictionModel, TerrainKind, TerrainSpec, MAX_HEIGHTS};
 
 use serde::{Deserialize, Serialize};
 use std::path::Path;

@@ -68,6 +68,29 @@ pub struct TerrainSpec {
     /// Tangential speed below which friction is viscous (regularised Coulomb), m/s.
     #[serde(default = "default_slip_velocity")]
     pub slip_velocity: f64,
+    /// How friction acts at the bars' ends: it sticks below μ N (the default), or it is
+    /// regularised Coulomb everywhere.
+    #[serde(default, skip_serializing_if = "FrictionModel::is_default")]
+    pub friction_model: FrictionModel,
+}
+
+/// A terrain shape's friction law at the capsules' ends (their sides slide regularised).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum FrictionModel {
+    /// An elastic–plastic tangential spring per contact: static friction up to μ N without
+    /// creep, kinetic friction μ N while sliding.
+    #[default]
+    StickSlip,
+    /// Friction `μ N` against the tangential velocity, viscous below `slip_velocity`: a
+    /// loaded contact creeps at a speed below it.
+    Regularized,
+}
+
+impl FrictionModel {
+    fn is_default(&self) -> bool {
+        *self == Self::default()
+    }
 }
 
 fn default_slip_velocity() -> f64 {

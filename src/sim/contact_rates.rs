@@ -3,7 +3,7 @@
 //! touch, and the changes of its keys that bring a rate down.
 
 use super::rate::{num, round_up, Cause, Rate};
-use crate::contact::Penalty;
+use crate::contact::{Penalty, Shape};
 use crate::model::Model;
 
 /// The ground's two rates: the penalty oscillator and the viscous friction (0 without a
@@ -32,9 +32,16 @@ pub fn contact_rates(model: &Model) -> Vec<Rate> {
             [Cause::GroundPenalty, Cause::Friction],
         );
     }
-    if model.terrain.is_some() {
+    if let Some(terrain) = &model.terrain {
         let (w, node) = terrain_compliance(model);
-        for (k, law) in terrain_laws(model).enumerate() {
+        for (k, (shape, law)) in terrain.shapes.iter().enumerate() {
+            // Sticking ends add a tangential spring as stiff as the normal one, and no
+            // viscous friction: a plane, touched only at ends, has none of it.
+            let ends_only = terrain.sticks[k] && matches!(shape, Shape::Plane { .. });
+            let law = Penalty {
+                friction: if ends_only { 0.0 } else { law.friction },
+                ..*law
+            };
             push(
                 law,
                 w,

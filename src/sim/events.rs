@@ -6,6 +6,9 @@
 //! interpolant of the bar ends from `(q₀, q̇₀, q₁, q̇₁)` (O(h⁴), to 1e-12 of the step), and
 //! the caller redoes the step in two parts, split at the crossing.
 //!
+//! Friction grips switch too (stick↔slip, see `grip`); their functions also need the
+//! velocities, from the interpolant's derivative.
+//!
 //! Not located (documented limits): a switch crossed twice inside one step (no sign change
 //! at its ends), the clamp `max(0, ·)` of cable and contact damping, and the friction law's
 //! change at the slip velocity. The switching functions depend only on the state and the
@@ -13,9 +16,12 @@
 
 use nalgebra::Vector3;
 
+use super::grip::{self, GripSwitch};
+use super::locate::{crossing, hermite};
 use crate::contact::{interior_excess, Shape};
 use crate::dynamics::{Inputs, Workspace};
 use crate::model::effects::{CableLink, ForceEffect};
+use crate::model::terrain::Terrain;
 use crate::model::Model;
 
 /// Most events split off one step; the rest of the step is then taken whole.
@@ -26,12 +32,6 @@ pub const MAX_SPLITS: u32 = 8;
 /// just located lies this close to the start of the next part, and a node grazing the
 /// ground would otherwise be chased into ever shorter steps.
 const EDGE: f64 = 1e-3;
-
-/// The crossing is located to this fraction of the step.
-const TOLERANCE: f64 = 1e-12;
-
-/// Most Illinois iterations per crossing.
-const MAX_ITERATIONS: usize = 100;
 
 /// A point a switching function watches.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -86,6 +86,12 @@ pub struct Events {
     switches: Vec<Switch>,
     /// The terrain shapes the terrain switches name.
     shapes: Vec<Shape>,
+    /// The friction grips' switches, the terrain they are on, and their signs at both ends
+    /// of the step (always taken with the velocities: the grips move between steps).
+    grips: Vec<GripSwitch>,
+    terrain: Option<Terrain>,
+    grip0: Vec<bool>,
+    grip1: Vec<bool>,
     /// The state at the start of the current (part of a) step.
     pub y0: Vec<f64>,
     /// Signs (`> 0`) of the switching functions at `y0` and at the end of the last step.
@@ -184,8 +190,13 @@ impl Events {
         let shapes = model.terrain.as_ref().map_or(Vec::new(), |t| {
             t.shapes.iter().map(|(s, _)| s.clone()).collect()
         });
+        let grips = grip::grip_switches(model);
         Self {
             shapes,
+            terrain: model.terrain.clone().filter(|_| !grips.is_empty()),
+            grip0: vec![false; grips.len()],
+            grip1: vec![false; grips.len()],
+            grips,
             positive0: vec![false; switches.len()],
             positive1: vec![false; switches.len()],
             switches,
@@ -202,7 +213,28 @@ impl Events {
 
     /// True when the model has no switching function (nothing to locate).
     pub fn is_empty(&self) -> bool {
-        self.switches.is_empty()
+        self.switches.is_empty() && self.grips.is_empty()
+    }
+
+    /// The grips that can act.
+    pub(super) fn grip_switches(&self) -> &[GripSwitch] {
+        &self.grips
+    }
+
+    /// Each grip's sign at the ends' positions `x` and velocities `v`.
+    fn grip_signs(
+        &self,
+        inputs: &Inputs,
+        x: &[Vector3<f64>],
+        v: &[Vector3<f64>],
+        out: &mut [bool],
+    ) {
+        let Some(terrain) = &self.terrain else {
+            return;
+        };
+        for (p, s) in out.iter_mut().zip(&self.grips) {
+            *p = grip::value(s, terrain, &inputs.grip, &x[s.end], &v[s.end]) > 0.0;
+        }
     }
 
     /// Notes the state a step starts from: copies it and takes the switches' signs there
@@ -222,6 +254,13 @@ impl Events {
                 &mut self.positive0,
                 ws,
             );
+        }
+        if !self.grips.is_empty() {
+            let half = y.len() / 2;
+            end_velocities(model, &y[half..], &mut self.v0);
+            let mut signs = std::mem::take(&mut self.grip0);
+            self.grip_signs(inputs, &self.x0, &self.v0, &mut signs);
+            self.grip0 = signs;
         }
         self.end_known = false;
     }
@@ -249,6 +288,24 @@ impl Events {
         let (lo, hi) = (EDGE * h, (1.0 - EDGE) * h);
         let mut earliest: Option<f64> = None;
         let mut velocities = false;
+        if !self.grips.is_empty() {
+            let half = y.len() / 2;
+            end_velocities(model, &y[half..], &mut self.v1);
+            velocities = true;
+            let mut signs = std::mem::take(&mut self.grip1);
+            self.grip_signs(inputs, &self.x1, &self.v1, &mut signs);
+            self.grip1 = signs;
+            for (j, s) in self.grips.iter().enumerate() {
+                if self.grip0[j] == self.grip1[j] {
+                    continue;
+                }
+                let g = |theta: f64| self.grip_along(s, inputs, theta, h);
+                let theta = crossing(g, g(0.0), g(h), h);
+                if theta > lo && theta < hi && earliest.is_none_or(|e| theta < e) {
+                    earliest = Some(theta);
+                }
+            }
+        }
         for (j, s) in self.switches.iter().enumerate() {
             if self.positive0[j] == self.positive1[j] {
                 continue;
@@ -263,7 +320,7 @@ impl Events {
                 value(s, &self.shapes, inputs, &self.x0),
                 value(s, &self.shapes, inputs, &self.x1),
             );
-            let theta = self.crossing(s, inputs, g0, g1, h);
+            let theta = crossing(|c| self.along(s, inputs, c, h), g0, g1, h);
             if theta > lo && theta < hi && earliest.is_none_or(|e| theta < e) {
                 earliest = Some(theta);
             }
@@ -276,51 +333,9 @@ impl Events {
         earliest
     }
 
-    /// Illinois (modified regula falsi) on the switch along the Hermite interpolant; the
-    /// end of the final bracket on the far side of the crossing.
-    fn crossing(&self, s: &Switch, inputs: &Inputs, g0: f64, g1: f64, h: f64) -> f64 {
-        let (mut a, mut fa) = (0.0, g0);
-        let (mut b, mut fb) = (h, g1);
-        let after = g1 > 0.0;
-        let mut side = 0i8;
-        for _ in 0..MAX_ITERATIONS {
-            if b - a <= TOLERANCE * h {
-                break;
-            }
-            let mut c = (a * fb - b * fa) / (fb - fa);
-            if !(c > a && c < b) {
-                c = 0.5 * (a + b);
-            }
-            let fc = self.along(s, inputs, c, h);
-            if (fc > 0.0) == after {
-                b = c;
-                fb = fc;
-                if side == 1 {
-                    fa *= 0.5;
-                }
-                side = 1;
-            } else {
-                a = c;
-                fa = fc;
-                if side == -1 {
-                    fb *= 0.5;
-                }
-                side = -1;
-            }
-        }
-        b
-    }
-
     /// The switch at time `theta` into the step, on the Hermite cubic of the bar ends.
     fn along(&self, s: &Switch, inputs: &Inputs, theta: f64, h: f64) -> f64 {
-        let u = theta / h;
-        let (u2, u3) = (u * u, u * u * u);
-        let w = [
-            2.0 * u3 - 3.0 * u2 + 1.0,
-            h * (u3 - 2.0 * u2 + u),
-            -2.0 * u3 + 3.0 * u2,
-            h * (u3 - u2),
-        ];
+        let w = hermite(theta / h, h);
         let at = |e: usize| {
             w[0] * self.x0[e] + w[1] * self.v0[e] + w[2] * self.x1[e] + w[3] * self.v1[e]
         };
@@ -328,6 +343,29 @@ impl Events {
             Point::End(e) => at(e),
             Point::Fixed(x) => x,
         })
+    }
+}
+
+impl Events {
+    /// A grip's switch at time `theta` into the step: position and velocity from the
+    /// Hermite cubic and its derivative.
+    fn grip_along(&self, s: &GripSwitch, inputs: &Inputs, theta: f64, h: f64) -> f64 {
+        let Some(terrain) = &self.terrain else {
+            return f64::MAX;
+        };
+        let e = s.end;
+        let (x0, v0, x1, v1) = (self.x0[e], self.v0[e], self.x1[e], self.v1[e]);
+        let w = hermite(theta / h, h);
+        let x = w[0] * x0 + w[1] * v0 + w[2] * x1 + w[3] * v1;
+        let u = theta / h;
+        let dw = [
+            (6.0 * u * u - 6.0 * u) / h,
+            3.0 * u * u - 4.0 * u + 1.0,
+            (6.0 * u - 6.0 * u * u) / h,
+            3.0 * u * u - 2.0 * u,
+        ];
+        let v = dw[0] * x0 + dw[1] * v0 + dw[2] * x1 + dw[3] * v1;
+        grip::value(s, terrain, &inputs.grip, &x, &v)
     }
 }
 

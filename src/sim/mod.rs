@@ -13,6 +13,8 @@ use crate::model::Model;
 mod cause;
 mod contact_rates;
 mod events;
+mod grip;
+mod locate;
 mod rate;
 mod stability;
 mod stepping;
@@ -60,6 +62,9 @@ pub struct Simulation {
     pub inputs: Inputs,
     state: State,
     last_good: Vec<f64>,
+    /// The grips at `last_good` and at `advance_start`.
+    last_good_grip: Vec<crate::contact::Grip>,
+    advance_grip: Vec<crate::contact::Grip>,
     advance_start: State,
     /// The inputs of the last step: carried integrator values are stale once they change.
     stepped_inputs: Inputs,
@@ -92,6 +97,8 @@ impl Clone for Simulation {
             inputs: self.inputs.clone(),
             state: self.state.clone(),
             last_good: self.last_good.clone(),
+            last_good_grip: self.last_good_grip.clone(),
+            advance_grip: self.advance_grip.clone(),
             advance_start: self.advance_start.clone(),
             stepped_inputs: self.stepped_inputs.clone(),
             h_next: self.h_next,
@@ -175,7 +182,10 @@ impl Simulation {
         let mut warnings = model.warnings.clone();
         let y = initial_state(&model, &mut ws, &mut warnings);
         let n = y.len();
+        let grips = Inputs::start(&model).grip;
         let mut sim = Self {
+            last_good_grip: grips.clone(),
+            advance_grip: grips,
             inputs: Inputs::start(&model),
             stepped_inputs: Inputs::start(&model),
             evaluated: None,
@@ -199,6 +209,7 @@ impl Simulation {
             model,
             warnings,
         };
+        sim.update_grips();
         sim.refresh();
         sim
     }
@@ -235,6 +246,7 @@ impl Simulation {
         assert_eq!(state.y.len(), self.state.y.len(), "state length");
         self.state = state;
         self.integrator.invalidate();
+        self.reset_grips();
         self.refresh();
     }
 

@@ -44,7 +44,7 @@ impl Simulation {
         self.check_inputs()?;
         self.check_step_stability()?;
         self.note_input_changes();
-        self.ws.copy_in_halves(&mut self.last_good, &self.state.y);
+        self.keep_last_good();
         self.attempt_located(t, h)?;
         self.state.time = t_next;
         Ok(())
@@ -61,6 +61,7 @@ impl Simulation {
         self.note_input_changes();
         self.advance_start.time = self.state.time;
         self.advance_start.y.copy_from_slice(&self.state.y);
+        self.advance_grip.copy_from_slice(&self.inputs.grip);
         let result = if self.integrator.adaptive() {
             self.advance_adaptive(t_end)
         } else {
@@ -69,6 +70,7 @@ impl Simulation {
         if result.is_err() {
             self.state.time = self.advance_start.time;
             self.state.y.copy_from_slice(&self.advance_start.y);
+            self.inputs.grip.copy_from_slice(&self.advance_grip);
             self.integrator.invalidate();
             self.refresh();
         }
@@ -107,7 +109,7 @@ impl Simulation {
             } else {
                 rest
             };
-            self.ws.copy_in_halves(&mut self.last_good, &self.state.y);
+            self.keep_last_good();
             self.attempt_located(t0, h)?;
             self.state.time = t1;
         }
@@ -143,7 +145,7 @@ impl Simulation {
                 });
             }
             attempts += 1;
-            self.ws.copy_in_halves(&mut self.last_good, &self.state.y);
+            self.keep_last_good();
             if locate {
                 self.events
                     .start(&self.model, &self.inputs, &self.state.y, &self.ws);
@@ -168,6 +170,7 @@ impl Simulation {
                             continue;
                         }
                     }
+                    self.update_grips();
                     let next = resume.take().map_or(next, |r| r.max(next));
                     accepted += 1;
                     self.state.time = if last { t_end } else { t + h };
@@ -191,7 +194,9 @@ impl Simulation {
     /// the correction, so a part starts, like any step, from a corrected state.
     fn attempt_located(&mut self, t: f64, h: f64) -> Result<(), StepError> {
         if !self.locate_events || self.events.is_empty() {
-            return self.attempt(t, h).map(|_| ());
+            self.attempt(t, h)?;
+            self.update_grips();
+            return Ok(());
         }
         let end = t + h;
         let (mut t0, mut rest) = (t, h);
@@ -200,16 +205,19 @@ impl Simulation {
                 .start(&self.model, &self.inputs, &self.state.y, &self.ws);
             self.attempt(t0, rest)?;
             if split == events::MAX_SPLITS {
+                self.update_grips();
                 break;
             }
             let Some(theta) =
                 self.events
                     .locate(&self.model, &self.inputs, &self.state.y, rest, &self.ws)
             else {
+                self.update_grips();
                 break;
             };
             self.discard_trial();
             self.attempt(t0, theta)?;
+            self.update_grips();
             self.stats.events += 1;
             t0 += theta;
             rest = end - t0;
@@ -288,8 +296,15 @@ impl Simulation {
         Ok(())
     }
 
+    /// Notes the state a step starts from, to return to if it fails.
+    fn keep_last_good(&mut self) {
+        self.ws.copy_in_halves(&mut self.last_good, &self.state.y);
+        self.last_good_grip.copy_from_slice(&self.inputs.grip);
+    }
+
     fn restore_last_good(&mut self) {
         self.state.y.copy_from_slice(&self.last_good);
+        self.inputs.grip.copy_from_slice(&self.last_good_grip);
         self.integrator.invalidate();
         self.refresh();
     }

@@ -58,6 +58,11 @@ impl Snapshot {
                 model.reeled.len(),
             ),
             (
+                "friction-grip values",
+                self.grips.len(),
+                4 * model.terrain.as_ref().map_or(0, |t| t.grips()),
+            ),
+            (
                 "negative-input warning flags",
                 self.warned_negative.len(),
                 core.warned_negative.len(),

@@ -12,11 +12,12 @@ use sha2::{Digest, Sha256};
 use super::state::Core;
 use super::variables::Variable;
 use super::Mode;
+use crate::contact::Grip;
 use crate::sim::{Simulation, State};
 use fmi2_model_description::Causality;
 
 const MAGIC: &[u8; 8] = b"TNSGSTAT";
-const VERSION: u32 = 3;
+const VERSION: u32 = 4;
 /// A SHA-256 of everything before it closes the buffer, so corruption is caught.
 const DIGEST_LEN: usize = 32;
 
@@ -39,6 +40,8 @@ pub struct Snapshot {
     h_next: f64,
     /// Values the integrator carries to the next step.
     carried: Vec<f64>,
+    /// The friction grips, four values each (mode, anchor).
+    grips: Vec<f64>,
 }
 
 impl Snapshot {
@@ -59,7 +62,23 @@ impl Snapshot {
                 .collect(),
             h_next: core.sim.carried().0,
             carried: core.sim.carried().1,
+            grips: core
+                .sim
+                .grips()
+                .iter()
+                .flat_map(|g| g.to_values())
+                .collect(),
         }
+    }
+
+    /// The grips the values hold (checked when they were read).
+    fn grips(&self) -> Vec<Grip> {
+        self.grips
+            .as_chunks::<4>()
+            .0
+            .iter()
+            .map(|v| Grip::from_values(*v).unwrap_or_default())
+            .collect()
     }
 
     /// Applies the state to `core` after checking it, or leaves `core` as it was.
@@ -81,6 +100,7 @@ impl Snapshot {
         sim.inputs.node_force = self.node_force.clone();
         sim.inputs.rest_length = self.rest_length.clone();
         sim.set_state(self.state.clone());
+        sim.set_grips(&self.grips());
         sim.restore_carried(self.h_next, &self.carried);
         core.sim = sim;
         core.scene = scene;
@@ -127,6 +147,8 @@ impl Snapshot {
         put_f64s(&mut out, &[self.h_next]);
         put_len(&mut out, self.carried.len());
         put_f64s(&mut out, &self.carried);
+        put_len(&mut out, self.grips.len());
+        put_f64s(&mut out, &self.grips);
         let digest = Sha256::digest(&out);
         out.extend_from_slice(&digest);
         out
@@ -190,6 +212,8 @@ impl Snapshot {
         let h_next = r.f64()?;
         let n = r.len()?;
         let carried = r.f64s(n)?;
+        let n = r.len()?;
+        let grips = r.f64s(n)?;
         if r.at != bytes.len() {
             return Err("trailing bytes after the serialized state".into());
         }
@@ -197,7 +221,7 @@ impl Snapshot {
             return Err("corrupt serialized state (checksum mismatch)".into());
         }
         let forces: Vec<f64> = node_force.iter().flat_map(|f| f.iter().copied()).collect();
-        let fields: [(&str, &[f64]); 10] = [
+        let fields: [(&str, &[f64]); 11] = [
             ("time", &[time]),
             ("the integrated state's time", &[state_time]),
             ("stop time", &[stop]),
@@ -208,6 +232,7 @@ impl Snapshot {
             ("parameter values", &parameters),
             ("the adaptive method's next step", &[h_next]),
             ("values carried by the integrator", &carried),
+            ("friction grips", &grips),
         ];
         for (what, values) in fields {
             if let Some(k) = values.iter().position(|x| !x.is_finite()) {
@@ -215,6 +240,22 @@ impl Snapshot {
                     "corrupt state: {what}: value {} is {}, not a finite number",
                     k + 1,
                     values[k]
+                ));
+            }
+        }
+        if grips.len() % 4 != 0 {
+            return Err(format!(
+                "corrupt state: {} friction-grip values, not four per grip",
+                grips.len()
+            ));
+        }
+        for (k, v) in grips.as_chunks::<4>().0.iter().enumerate() {
+            if Grip::from_values(*v).is_none() {
+                return Err(format!(
+                    "corrupt state: friction grip {} has mode {} (allowed: 0 free, 1 stick, \
+                     2 slip)",
+                    k + 1,
+                    v[0]
                 ));
             }
         }
@@ -244,6 +285,7 @@ impl Snapshot {
             parameters,
             h_next,
             carried,
+            grips,
         })
     }
 }

@@ -1,0 +1,204 @@
+//! Friction that sticks: an elastic–plastic tangential spring per contact point (the
+//! Cundall–Strack model of discrete-element codes), held by an anchor.
+//!
+//! - **Stick**: the point `x` is tied to its anchor `a` by a tangential spring and damper
+//!   with the normal law's `k` and `c`, `f_t = −k P(x − a) − c v_t` (`P` drops the normal
+//!   part), capped at `μ N`. At rest under a load below `μ N` the spring holds it exactly:
+//!   no creep.
+//! - **Slip**: kinetic friction `f_t = −μ N ê`, with `ê` the tangential direction from the
+//!   anchor to the point. The anchor stays put while the point slides straight away from
+//!   it; once the sliding direction turns more than [`TURN`] from `ê`, the anchor moves
+//!   behind the point, onto its velocity.
+//!
+//! The mode and the anchor change only between steps (`sim::grip`), where a switching
+//! function ([`switch`]) says so: stick→slip when `|f_t|` reaches `μ N`, slip→stick when
+//! the point stops moving away from its anchor, a new slip anchor at a turn. A new stick
+//! anchor continues the force, so the force is continuous there; every switch depends only
+//! on the state, so an event-locating method keeps its order across them.
+
+use nalgebra::Vector3;
+
+use super::Penalty;
+
+/// Shortest anchor trail in slip, m: keeps the direction defined while `μ N` is near 0.
+const MIN_TRAIL: f64 = 1e-9;
+
+/// The cosine of the largest angle, 5°, between the sliding direction and the direction
+/// from the anchor (that of the friction) before the anchor moves onto the velocity.
+pub const TURN: f64 = 0.996_194_698_091_745_5;
+
+/// How far past the Coulomb limit a stick may be, relative, before it slips: a stick just
+/// begun from a slip sits at the limit to round-off, and must not slip again at once.
+const STICK_SLACK: f64 = 1e-9;
+
+/// Speed toward the anchor, m/s, at which a slip ends (below round-off of any real speed).
+const SLIP_SLACK: f64 = 1e-12;
+
+/// The friction state of one contact point.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub enum Grip {
+    /// Not touching (or touched inside a step): the regularised law applies.
+    #[default]
+    Free,
+    /// Held by a tangential spring to the anchor, m.
+    Stick(Vector3<f64>),
+    /// Sliding away from the anchor, m.
+    Slip(Vector3<f64>),
+}
+
+impl Grip {
+    /// The mode code and anchor, as an FMU state stores them: 0 free, 1 stick, 2 slip.
+    pub fn to_values(self) -> [f64; 4] {
+        match self {
+            Self::Free => [0.0; 4],
+            Self::Stick(a) => [1.0, a.x, a.y, a.z],
+            Self::Slip(a) => [2.0, a.x, a.y, a.z],
+        }
+    }
+
+    /// The inverse of [`Grip::to_values`]; `None` for an unknown mode.
+    pub fn from_values(v: [f64; 4]) -> Option<Self> {
+        let a = Vector3::new(v[1], v[2], v[3]);
+        match v[0] {
+            0.0 => Some(Self::Free),
+            1.0 => Some(Self::Stick(a)),
+            2.0 => Some(Self::Slip(a)),
+            _ => None,
+        }
+    }
+
+    /// Whether it sticks.
+    pub fn sticks(self) -> bool {
+        matches!(self, Self::Stick(_))
+    }
+}
+
+/// One contact point as the law sees it.
+#[derive(Debug, Clone, Copy)]
+pub struct Touch<'a> {
+    /// Penetration depth, m (> 0 while touching).
+    pub depth: f64,
+    /// The shape's outward unit normal.
+    pub normal: &'a Vector3<f64>,
+    /// The point (a capsule end's centre), m.
+    pub x: &'a Vector3<f64>,
+    /// Its velocity, m/s.
+    pub v: &'a Vector3<f64>,
+}
+
+impl Touch<'_> {
+    /// The normal force `N = max(0, k d − c n·v)`, N.
+    fn normal_force(&self, law: &Penalty) -> f64 {
+        (law.stiffness * self.depth - law.damping * self.normal.dot(self.v)).max(0.0)
+    }
+
+    /// The tangential part of `w`.
+    fn tangential(&self, w: &Vector3<f64>) -> Vector3<f64> {
+        w - self.normal * self.normal.dot(w)
+    }
+
+    /// The stick spring's force before the cap, N.
+    fn spring(&self, law: &Penalty, anchor: &Vector3<f64>) -> Vector3<f64> {
+        -(self.tangential(&(self.x - anchor)) * law.stiffness
+            + self.tangential(self.v) * law.damping)
+    }
+
+    /// The unit tangential direction from `anchor` to the point (zero if there is none).
+    fn away(&self, anchor: &Vector3<f64>) -> Vector3<f64> {
+        let d = self.tangential(&(self.x - anchor));
+        let n = d.norm();
+        if n > 0.0 {
+            d / n
+        } else {
+            Vector3::zeros()
+        }
+    }
+}
+
+/// The contact force of a point held by `grip`, N.
+#[inline]
+pub fn force(law: &Penalty, touch: &Touch, grip: Grip) -> Vector3<f64> {
+    let (anchor, sticks) = match grip {
+        Grip::Free => return law.force(touch.depth, touch.normal, touch.v),
+        Grip::Stick(a) => (a, true),
+        Grip::Slip(a) => (a, false),
+    };
+    let normal = touch.normal_force(law);
+    let limit = law.friction * normal;
+    let friction = if sticks {
+        let f = touch.spring(law, &anchor);
+        let m = f.norm();
+        if m > limit {
+            f * (limit / m)
+        } else {
+            f
+        }
+    } else {
+        -touch.away(&anchor) * limit
+    };
+    touch.normal * normal + friction
+}
+
+/// Positive while `grip` keeps its mode and anchor: `μ N − |f_t|` (before the cap) while
+/// it sticks; while it slips, `v_t·ê − cos 5° |v_t|`, the speed away from the anchor less
+/// that of a path turned 5° from it (it changes sign when the point stops or turns);
+/// `f64::MAX` when it is free.
+#[inline]
+pub fn switch(law: &Penalty, touch: &Touch, grip: Grip) -> f64 {
+    match grip {
+        Grip::Free => f64::MAX,
+        Grip::Stick(a) => {
+            let limit = law.friction * touch.normal_force(law);
+            limit * (1.0 + STICK_SLACK) - touch.spring(law, &a).norm()
+        }
+        Grip::Slip(a) => {
+            let v = touch.tangential(touch.v);
+            v.dot(&touch.away(&a)) - TURN * v.norm() + SLIP_SLACK
+        }
+    }
+}
+
+/// The grip after a step that ended at `touch` (`None` if the point no longer touches).
+/// A frictionless law never grips.
+pub fn next(law: &Penalty, touch: Option<&Touch>, grip: Grip) -> Grip {
+    let Some(touch) = touch.filter(|t| t.depth > 0.0 && law.friction > 0.0) else {
+        return Grip::Free;
+    };
+    let holds = switch(law, touch, grip) > 0.0;
+    let limit = law.friction * touch.normal_force(law);
+    let trail = (limit / law.stiffness).max(MIN_TRAIL);
+    match grip {
+        // Anchored where it first touched.
+        Grip::Free => Grip::Stick(*touch.x),
+        Grip::Stick(_) if holds => grip,
+        // It slips the way the spring pulled it back from.
+        Grip::Stick(a) => {
+            let f = touch.spring(law, &a);
+            let m = f.norm();
+            let away = if m > 0.0 { -f / m } else { touch.away(&a) };
+            Grip::Slip(touch.x - away * trail)
+        }
+        Grip::Slip(_) if holds => grip,
+        // Turned: the anchor moves behind the point, onto its velocity.
+        Grip::Slip(a) if touch.v.dot(&touch.away(&a)) > SLIP_SLACK => {
+            let v = touch.tangential(touch.v);
+            Grip::Slip(touch.x - v * (trail / v.norm()))
+        }
+        // Stopped: the new spring pulls as the sliding friction did,
+        // `k P(x − a') = μ N ê − c v_t`.
+        Grip::Slip(a) => {
+            let pull = touch.away(&a) * limit - touch.tangential(touch.v) * law.damping;
+            Grip::Stick(touch.x - pull / law.stiffness)
+        }
+    }
+}
+
+/// Energy in a sticking spring, `|f_s|² / 2k` with `|f_s|` capped at `μ N`, J.
+pub fn energy(law: &Penalty, touch: &Touch, grip: Grip) -> f64 {
+    let Grip::Stick(a) = grip else {
+        return 0.0;
+    };
+    let stretch = law.stiffness * touch.tangential(&(touch.x - a)).norm();
+    let held = stretch.min(law.friction * touch.normal_force(law));
+    0.5 * held * held / law.stiffness
+}

@@ -1,0 +1,142 @@
+//! Friction grips between steps. The grips (`Inputs::grip`) are held over a step; after
+//! each step that is kept, every grip on a shape whose friction sticks takes its next mode
+//! and anchor at the step's end ([`crate::contact::grip::next`]). Where a grip's switching
+//! function changes sign inside a step, `events` splits the step there first, so the
+//! switch happens where it belongs.
+
+use nalgebra::Vector3;
+
+use super::Simulation;
+use crate::contact::grip::{self, Touch};
+use crate::contact::Grip;
+use crate::model::terrain::Terrain;
+use crate::model::Model;
+
+/// The switching function of one grip: a bar end on a shape whose friction sticks.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(super) struct GripSwitch {
+    /// Index into `Inputs::grip`.
+    pub slot: usize,
+    /// The bar end (its capsule end's centre).
+    pub end: usize,
+    /// The terrain shape.
+    pub shape: usize,
+    /// The capsule's radius, m.
+    pub radius: f64,
+}
+
+/// Every grip of `model` that can act: a moving bar end on a shape whose friction sticks.
+pub(super) fn grip_switches(model: &Model) -> Vec<GripSwitch> {
+    let Some(terrain) = &model.terrain else {
+        return Vec::new();
+    };
+    let mut out = Vec::new();
+    for (c, cap) in terrain.capsules.iter().enumerate() {
+        for (shape, &sticks) in terrain.sticks.iter().enumerate() {
+            for (i, end) in cap.ends.iter().enumerate() {
+                if let (true, Some(end)) = (sticks, *end) {
+                    out.push(GripSwitch {
+                        slot: terrain.grip(c, shape, i),
+                        end,
+                        shape,
+                        radius: cap.radius,
+                    });
+                }
+            }
+        }
+    }
+    out
+}
+
+/// Calls `with(touch)` for the contact of the sphere at `x` (moving with `v`) on the
+/// switch's shape, `None` if it does not touch.
+#[inline]
+fn touching<R>(
+    s: &GripSwitch,
+    terrain: &Terrain,
+    x: &Vector3<f64>,
+    v: &Vector3<f64>,
+    with: impl FnOnce(Option<&Touch>) -> R,
+) -> R {
+    let (shape, _) = &terrain.shapes[s.shape];
+    match shape.distance(x) {
+        Some((phi, normal)) if s.radius - phi > 0.0 => with(Some(&Touch {
+            depth: s.radius - phi,
+            normal: &normal,
+            x,
+            v,
+        })),
+        _ => with(None),
+    }
+}
+
+/// The grip's switching function at `(x, v)` (`f64::MAX` where it does not touch: the
+/// contact's own switch watches that).
+#[inline]
+pub(super) fn value(
+    s: &GripSwitch,
+    terrain: &Terrain,
+    grips: &[Grip],
+    x: &Vector3<f64>,
+    v: &Vector3<f64>,
+) -> f64 {
+    let grip = grips[s.slot];
+    if grip == Grip::Free {
+        return f64::MAX;
+    }
+    let law = &terrain.shapes[s.shape].1;
+    touching(s, terrain, x, v, |t| {
+        t.map_or(f64::MAX, |t| grip::switch(law, t, grip))
+    })
+}
+
+impl Simulation {
+    /// Moves every grip on to the current state (after a kept step, or a new state). Values
+    /// the integrator carries were computed with the old grips: a new mode drops them (a
+    /// trailing anchor moved along its direction leaves the force where it is).
+    pub(super) fn update_grips(&mut self) {
+        let Some(terrain) = &self.model.terrain else {
+            return;
+        };
+        let (mut moved, mut switched) = (false, false);
+        let half = self.state.y.len() / 2;
+        let (q, qd) = self.state.y.split_at(half);
+        let coords = &self.model.coords;
+        for s in self.events.grip_switches() {
+            let x = coords.end_vector(s.end, q, true);
+            let v = coords.end_vector(s.end, qd, false);
+            let law = &terrain.shapes[s.shape].1;
+            let grip = &mut self.inputs.grip[s.slot];
+            let next = touching(s, terrain, &x, &v, |t| grip::next(law, t, *grip));
+            moved |= next != *grip;
+            switched |= std::mem::discriminant(&next) != std::mem::discriminant(grip);
+            *grip = next;
+        }
+        if switched {
+            self.integrator.invalidate();
+        }
+        if moved {
+            self.stepped_inputs.grip.copy_from_slice(&self.inputs.grip);
+        }
+    }
+
+    /// The friction grips (`Inputs::grip`).
+    pub fn grips(&self) -> &[Grip] {
+        &self.inputs.grip
+    }
+
+    /// Replaces the grips (from a snapshot, after [`Simulation::set_state`]) and
+    /// re-evaluates the outputs.
+    pub fn set_grips(&mut self, grips: &[Grip]) {
+        assert_eq!(grips.len(), self.inputs.grip.len(), "grip count");
+        self.inputs.grip.copy_from_slice(grips);
+        self.integrator.invalidate();
+        self.refresh();
+    }
+
+    /// Lets every grip go, then grips where the state touches (a state set from outside).
+    pub(super) fn reset_grips(&mut self) {
+        self.inputs.grip.fill(Grip::Free);
+        self.update_grips();
+    }
+}
