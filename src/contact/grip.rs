@@ -3,8 +3,8 @@
 //!
 //! - **Stick**: the point `x` is tied to its anchor `a` by a tangential spring and damper
 //!   with the normal law's `k` and `c`, `f_t = −k P(x − a) − c v_t` (`P` drops the normal
-//!   part), capped at `μ N`. At rest under a load below `μ N` the spring holds it exactly:
-//!   no creep.
+//!   part), up to `μ N`. At rest under a load below `μ N` the spring holds it exactly: no
+//!   creep.
 //! - **Slip**: kinetic friction `f_t = −μ N ê`, with `ê` the tangential direction from the
 //!   anchor to the point. The anchor stays put while the point slides straight away from
 //!   it; once the sliding direction turns more than [`TURN`] from `ê`, the anchor moves
@@ -115,26 +115,17 @@ impl Touch<'_> {
     }
 }
 
-/// The contact force of a point held by `grip`, N.
+/// The contact force of a point held by `grip`, N. A sticking spring is not capped at
+/// `μ N` here: its switch to slip is located where it reaches the cap, and a cap inside the
+/// step would make the force a discontinuous sign of the tangential velocity wherever the
+/// spring is slack (which an implicit method's Newton iteration cannot solve).
 #[inline]
 pub fn force(law: &Penalty, touch: &Touch, grip: Grip) -> Vector3<f64> {
-    let (anchor, sticks) = match grip {
-        Grip::Free => return law.force(touch.depth, touch.normal, touch.v),
-        Grip::Stick(a) => (a, true),
-        Grip::Slip(a) => (a, false),
-    };
     let normal = touch.normal_force(law);
-    let limit = law.friction * normal;
-    let friction = if sticks {
-        let f = touch.spring(law, &anchor);
-        let m = f.norm();
-        if m > limit {
-            f * (limit / m)
-        } else {
-            f
-        }
-    } else {
-        -touch.away(&anchor) * limit
+    let friction = match grip {
+        Grip::Free => return law.force(touch.depth, touch.normal, touch.v),
+        Grip::Stick(a) => touch.spring(law, &a),
+        Grip::Slip(a) => -touch.away(&a) * (law.friction * normal),
     };
     touch.normal * normal + friction
 }
@@ -159,18 +150,24 @@ pub fn switch(law: &Penalty, touch: &Touch, grip: Grip) -> f64 {
 }
 
 /// The grip after a step that ended at `touch` (`None` if the point no longer touches).
-/// A frictionless law never grips.
-pub fn next(law: &Penalty, touch: Option<&Touch>, grip: Grip) -> Grip {
+/// A frictionless law never grips. `switched` says that the step was cut where this grip's
+/// switch changes sign: it switches then, whatever the sign at the step's end (which, a
+/// step's error away from the interpolant that located it, may still lie before it).
+pub fn next(law: &Penalty, touch: Option<&Touch>, grip: Grip, switched: bool) -> Grip {
     let Some(touch) = touch.filter(|t| t.depth > 0.0 && law.friction > 0.0) else {
         return Grip::Free;
     };
-    let holds = switch(law, touch, grip) > 0.0;
     let limit = law.friction * touch.normal_force(law);
     let trail = (limit / law.stiffness).max(MIN_TRAIL);
+    if let Grip::Free = grip {
+        // Anchored where it first touched, unless it already slides harder than μ N holds.
+        return next(law, Some(touch), Grip::Stick(*touch.x), false);
+    }
+    if !switched && switch(law, touch, grip) > 0.0 {
+        return grip;
+    }
     match grip {
-        // Anchored where it first touched.
-        Grip::Free => Grip::Stick(*touch.x),
-        Grip::Stick(_) if holds => grip,
+        Grip::Free => grip,
         // It slips the way the spring pulled it back from.
         Grip::Stick(a) => {
             let f = touch.spring(law, &a);
@@ -178,9 +175,8 @@ pub fn next(law: &Penalty, touch: Option<&Touch>, grip: Grip) -> Grip {
             let away = if m > 0.0 { -f / m } else { touch.away(&a) };
             Grip::Slip(touch.x - away * trail)
         }
-        Grip::Slip(_) if holds => grip,
         // Turned: the anchor moves behind the point, onto its velocity.
-        Grip::Slip(a) if touch.v.dot(&touch.away(&a)) > SLIP_SLACK => {
+        Grip::Slip(a) if turned(touch, &touch.away(&a)) => {
             let v = touch.tangential(touch.v);
             Grip::Slip(touch.x - v * (trail / v.norm()))
         }
@@ -193,12 +189,19 @@ pub fn next(law: &Penalty, touch: Option<&Touch>, grip: Grip) -> Grip {
     }
 }
 
-/// Energy in a sticking spring, `|f_s|² / 2k` with `|f_s|` capped at `μ N`, J.
+/// Whether a slip's switch fired because the path turned (it still moves away from the
+/// anchor, and across `away` by half the turn or more), not because it stopped.
+fn turned(touch: &Touch, away: &Vector3<f64>) -> bool {
+    let v = touch.tangential(touch.v);
+    let along = v.dot(away);
+    let across = (v - away * along).norm();
+    along > SLIP_SLACK && across >= 0.5 * (1.0 - TURN * TURN).sqrt() * v.norm()
+}
+
+/// Energy in a sticking spring, `½ k |P(x − a)|²`, J.
 pub fn energy(law: &Penalty, touch: &Touch, grip: Grip) -> f64 {
     let Grip::Stick(a) = grip else {
         return 0.0;
     };
-    let stretch = law.stiffness * touch.tangential(&(touch.x - a)).norm();
-    let held = stretch.min(law.friction * touch.normal_force(law));
-    0.5 * held * held / law.stiffness
+    0.5 * law.stiffness * touch.tangential(&(touch.x - a)).norm_squared()
 }

@@ -9,6 +9,7 @@ use nalgebra::Vector3;
 use super::Simulation;
 use crate::contact::grip::{self, Touch};
 use crate::contact::Grip;
+use crate::dynamics;
 use crate::model::terrain::Terrain;
 use crate::model::Model;
 
@@ -23,6 +24,20 @@ pub(super) struct GripSwitch {
     pub shape: usize,
     /// The capsule's radius, m.
     pub radius: f64,
+}
+
+/// A switch that a located event cut a step at: its grip changes there whatever the sign
+/// at the step's end, which a step's error may leave just short of the switch.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(super) enum Cut {
+    /// Grip switch `j` (index into the grip switches).
+    Grip(usize),
+    /// A bar end starts (`touching`) or stops touching a shape.
+    Touch {
+        end: usize,
+        shape: usize,
+        touching: bool,
+    },
 }
 
 /// Every grip of `model` that can act: a moving bar end on a shape whose friction sticks.
@@ -49,19 +64,20 @@ pub(super) fn grip_switches(model: &Model) -> Vec<GripSwitch> {
 }
 
 /// Calls `with(touch)` for the contact of the sphere at `x` (moving with `v`) on the
-/// switch's shape, `None` if it does not touch.
+/// switch's shape, `None` if it does not touch; `touching` counts a sphere within
+/// round-off of the surface as touching (an onset just located).
 #[inline]
 fn touching<R>(
     s: &GripSwitch,
     terrain: &Terrain,
-    x: &Vector3<f64>,
-    v: &Vector3<f64>,
+    (x, v): (&Vector3<f64>, &Vector3<f64>),
+    touching: bool,
     with: impl FnOnce(Option<&Touch>) -> R,
 ) -> R {
     let (shape, _) = &terrain.shapes[s.shape];
     match shape.distance(x) {
-        Some((phi, normal)) if s.radius - phi > 0.0 => with(Some(&Touch {
-            depth: s.radius - phi,
+        Some((phi, normal)) if s.radius - phi > 0.0 || touching => with(Some(&Touch {
+            depth: (s.radius - phi).max(f64::MIN_POSITIVE),
             normal: &normal,
             x,
             v,
@@ -85,39 +101,77 @@ pub(super) fn value(
         return f64::MAX;
     }
     let law = &terrain.shapes[s.shape].1;
-    touching(s, terrain, x, v, |t| {
+    touching(s, terrain, (x, v), false, |t| {
         t.map_or(f64::MAX, |t| grip::switch(law, t, grip))
     })
 }
 
 impl Simulation {
-    /// Moves every grip on to the current state (after a kept step, or a new state). Values
-    /// the integrator carries were computed with the old grips: a new mode drops them (a
-    /// trailing anchor moved along its direction leaves the force where it is).
-    pub(super) fn update_grips(&mut self) {
+    /// Moves every grip on to the current state (after a kept step, or a new state;
+    /// `at_cut` if a located event cut the step short, which then switches the grips whose
+    /// switches it crossed). Values the integrator carries were computed with the old
+    /// grips: a new mode drops them (a trailing anchor moved along its direction leaves the
+    /// force where it is).
+    pub(super) fn update_grips(&mut self, at_cut: bool) {
         let Some(terrain) = &self.model.terrain else {
             return;
         };
-        let (mut moved, mut switched) = (false, false);
+        let (mut moved, mut new_mode) = (false, false);
         let half = self.state.y.len() / 2;
         let (q, qd) = self.state.y.split_at(half);
         let coords = &self.model.coords;
-        for s in self.events.grip_switches() {
+        let cuts = if at_cut { self.events.cuts() } else { &[] };
+        for (j, s) in self.events.grip_switches().iter().enumerate() {
             let x = coords.end_vector(s.end, q, true);
             let v = coords.end_vector(s.end, qd, false);
             let law = &terrain.shapes[s.shape].1;
             let grip = &mut self.inputs.grip[s.slot];
-            let next = touching(s, terrain, &x, &v, |t| grip::next(law, t, *grip));
+            let switched = cuts.contains(&Cut::Grip(j));
+            let onset = cuts.iter().find_map(|c| match *c {
+                Cut::Touch {
+                    end,
+                    shape,
+                    touching,
+                } if end == s.end && shape == s.shape => Some(touching),
+                _ => None,
+            });
+            let next = if onset == Some(false) {
+                Grip::Free
+            } else {
+                touching(s, terrain, (&x, &v), onset == Some(true), |t| {
+                    grip::next(law, t, *grip, switched)
+                })
+            };
             moved |= next != *grip;
-            switched |= std::mem::discriminant(&next) != std::mem::discriminant(grip);
+            new_mode |= std::mem::discriminant(&next) != std::mem::discriminant(grip);
             *grip = next;
         }
-        if switched {
+        if new_mode {
             self.integrator.invalidate();
         }
         if moved {
             self.stepped_inputs.grip.copy_from_slice(&self.inputs.grip);
         }
+    }
+
+    /// After a trial step of `h` from `t` (to the current state): the time into it of the
+    /// earliest switch to locate, the grips' included (those with the accelerations at both
+    /// ends, evaluated here only where a grip's sign changed).
+    pub(super) fn locate_switch(&mut self, t: f64, h: f64) -> Option<f64> {
+        let earliest = self
+            .events
+            .locate(&self.model, &self.inputs, &self.state.y, h, &self.ws);
+        if !self.events.grips_changed() {
+            return earliest;
+        }
+        let half = self.state.y.len() / 2;
+        let (y0, acc0, acc1) = self.events.acceleration_buffers();
+        let (q0, v0) = y0.split_at(half);
+        dynamics::accelerations(&self.model, &self.inputs, t, q0, v0, &mut self.ws, acc0);
+        let (q1, v1) = self.state.y.split_at(half);
+        dynamics::accelerations(&self.model, &self.inputs, t + h, q1, v1, &mut self.ws, acc1);
+        self.events
+            .locate_grips(&self.model, &self.inputs, h, earliest)
     }
 
     /// The friction grips (`Inputs::grip`).
@@ -137,6 +191,6 @@ impl Simulation {
     /// Lets every grip go, then grips where the state touches (a state set from outside).
     pub(super) fn reset_grips(&mut self) {
         self.inputs.grip.fill(Grip::Free);
-        self.update_grips();
+        self.update_grips(false);
     }
 }

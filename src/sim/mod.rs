@@ -209,7 +209,7 @@ impl Simulation {
             model,
             warnings,
         };
-        sim.update_grips();
+        sim.update_grips(false);
         sim.refresh();
         sim
     }

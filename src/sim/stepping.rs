@@ -121,8 +121,10 @@ impl Simulation {
         let mut attempts = 0;
         let max = self.model.solver.max_steps;
         let locate = self.locate_events && !self.events.is_empty();
-        // The natural next step while a step is clipped at a located event.
+        // The natural next step while a step is clipped at a located event, and the clipped
+        // step with the switch it ends at.
         let mut resume: Option<f64> = None;
+        let mut clip: Option<f64> = None;
         loop {
             let t = self.state.time;
             let rest = t_end - t;
@@ -155,14 +157,9 @@ impl Simulation {
                     // A step clipped at an event is not checked again: its end lies just
                     // past the switch, and a second look could only clip it ever shorter.
                     if locate && resume.is_none() {
-                        if let Some(theta) = self.events.locate(
-                            &self.model,
-                            &self.inputs,
-                            &self.state.y,
-                            h,
-                            &self.ws,
-                        ) {
+                        if let Some(theta) = self.locate_switch(t, h) {
                             // Redo the step, clipped to end just past the switch.
+                            clip = Some(theta);
                             self.discard_trial();
                             self.stats.events += 1;
                             resume = Some(next);
@@ -170,7 +167,8 @@ impl Simulation {
                             continue;
                         }
                     }
-                    self.update_grips();
+                    let at_cut = clip.take() == Some(h);
+                    self.update_grips(at_cut);
                     let next = resume.take().map_or(next, |r| r.max(next));
                     accepted += 1;
                     self.state.time = if last { t_end } else { t + h };
@@ -195,7 +193,7 @@ impl Simulation {
     fn attempt_located(&mut self, t: f64, h: f64) -> Result<(), StepError> {
         if !self.locate_events || self.events.is_empty() {
             self.attempt(t, h)?;
-            self.update_grips();
+            self.update_grips(false);
             return Ok(());
         }
         let end = t + h;
@@ -205,19 +203,16 @@ impl Simulation {
                 .start(&self.model, &self.inputs, &self.state.y, &self.ws);
             self.attempt(t0, rest)?;
             if split == events::MAX_SPLITS {
-                self.update_grips();
+                self.update_grips(false);
                 break;
             }
-            let Some(theta) =
-                self.events
-                    .locate(&self.model, &self.inputs, &self.state.y, rest, &self.ws)
-            else {
-                self.update_grips();
+            let Some(theta) = self.locate_switch(t0, rest) else {
+                self.update_grips(false);
                 break;
             };
             self.discard_trial();
             self.attempt(t0, theta)?;
-            self.update_grips();
+            self.update_grips(true);
             self.stats.events += 1;
             t0 += theta;
             rest = end - t0;

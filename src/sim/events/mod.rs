@@ -16,13 +16,18 @@
 
 use nalgebra::Vector3;
 
-use super::grip::{self, GripSwitch};
+mod grips;
+
+use super::grip::{Cut, GripSwitch};
 use super::locate::{crossing, hermite};
 use crate::contact::{interior_excess, Shape};
 use crate::dynamics::{Inputs, Workspace};
 use crate::model::effects::{CableLink, ForceEffect};
 use crate::model::terrain::Terrain;
 use crate::model::Model;
+
+/// Crossings this close after the earliest, as a fraction of the step, happen with it.
+const CUT_TIE: f64 = 1e-9;
 
 /// Most events split off one step; the rest of the step is then taken whole.
 pub const MAX_SPLITS: u32 = 8;
@@ -92,6 +97,18 @@ pub struct Events {
     terrain: Option<Terrain>,
     grip0: Vec<bool>,
     grip1: Vec<bool>,
+    /// Whether a grip's sign changed over the last step located: its crossing waits for
+    /// the accelerations at both ends ([`Events::locate_grips`]).
+    grips_changed: bool,
+    /// Reduced accelerations at both ends of the step, for the grips' quintic.
+    acc0: Vec<f64>,
+    acc1: Vec<f64>,
+    a0: Vec<Vector3<f64>>,
+    a1: Vec<Vector3<f64>>,
+    /// The grips' switches that the last [`Events::locate`] found crossed by the time it
+    /// cut the step at (several at once where a structure is symmetric), with their times.
+    crossed: Vec<(Cut, f64)>,
+    cuts: Vec<Cut>,
     /// The state at the start of the current (part of a) step.
     pub y0: Vec<f64>,
     /// Signs (`> 0`) of the switching functions at `y0` and at the end of the last step.
@@ -190,13 +207,20 @@ impl Events {
         let shapes = model.terrain.as_ref().map_or(Vec::new(), |t| {
             t.shapes.iter().map(|(s, _)| s.clone()).collect()
         });
-        let grips = grip::grip_switches(model);
+        let grips = super::grip::grip_switches(model);
         Self {
             shapes,
             terrain: model.terrain.clone().filter(|_| !grips.is_empty()),
             grip0: vec![false; grips.len()],
             grip1: vec![false; grips.len()],
+            grips_changed: false,
+            acc0: vec![0.0; if grips.is_empty() { 0 } else { n / 2 }],
+            acc1: vec![0.0; if grips.is_empty() { 0 } else { n / 2 }],
+            a0: vec![Vector3::zeros(); if grips.is_empty() { 0 } else { ends }],
+            a1: vec![Vector3::zeros(); if grips.is_empty() { 0 } else { ends }],
             grips,
+            crossed: Vec::new(),
+            cuts: Vec::new(),
             positive0: vec![false; switches.len()],
             positive1: vec![false; switches.len()],
             switches,
@@ -216,25 +240,14 @@ impl Events {
         self.switches.is_empty() && self.grips.is_empty()
     }
 
+    /// The grips' switches crossed by the time the last located event cut the step at.
+    pub(super) fn cuts(&self) -> &[Cut] {
+        &self.cuts
+    }
+
     /// The grips that can act.
     pub(super) fn grip_switches(&self) -> &[GripSwitch] {
         &self.grips
-    }
-
-    /// Each grip's sign at the ends' positions `x` and velocities `v`.
-    fn grip_signs(
-        &self,
-        inputs: &Inputs,
-        x: &[Vector3<f64>],
-        v: &[Vector3<f64>],
-        out: &mut [bool],
-    ) {
-        let Some(terrain) = &self.terrain else {
-            return;
-        };
-        for (p, s) in out.iter_mut().zip(&self.grips) {
-            *p = grip::value(s, terrain, &inputs.grip, &x[s.end], &v[s.end]) > 0.0;
-        }
     }
 
     /// Notes the state a step starts from: copies it and takes the switches' signs there
@@ -288,6 +301,9 @@ impl Events {
         let (lo, hi) = (EDGE * h, (1.0 - EDGE) * h);
         let mut earliest: Option<f64> = None;
         let mut velocities = false;
+        self.crossed.clear();
+        self.cuts.clear();
+        self.grips_changed = false;
         if !self.grips.is_empty() {
             let half = y.len() / 2;
             end_velocities(model, &y[half..], &mut self.v1);
@@ -295,16 +311,7 @@ impl Events {
             let mut signs = std::mem::take(&mut self.grip1);
             self.grip_signs(inputs, &self.x1, &self.v1, &mut signs);
             self.grip1 = signs;
-            for (j, s) in self.grips.iter().enumerate() {
-                if self.grip0[j] == self.grip1[j] {
-                    continue;
-                }
-                let g = |theta: f64| self.grip_along(s, inputs, theta, h);
-                let theta = crossing(g, g(0.0), g(h), h);
-                if theta > lo && theta < hi && earliest.is_none_or(|e| theta < e) {
-                    earliest = Some(theta);
-                }
-            }
+            self.grips_changed = self.grip0 != self.grip1;
         }
         for (j, s) in self.switches.iter().enumerate() {
             if self.positive0[j] == self.positive1[j] {
@@ -321,9 +328,28 @@ impl Events {
                 value(s, &self.shapes, inputs, &self.x1),
             );
             let theta = crossing(|c| self.along(s, inputs, c, h), g0, g1, h);
+            if let Switch::TerrainEnd {
+                at: Point::End(end),
+                shape,
+                ..
+            } = *s
+            {
+                let touching = g1 < 0.0;
+                self.crossed.push((
+                    Cut::Touch {
+                        end,
+                        shape,
+                        touching,
+                    },
+                    theta,
+                ));
+            }
             if theta > lo && theta < hi && earliest.is_none_or(|e| theta < e) {
                 earliest = Some(theta);
             }
+        }
+        if !self.grips_changed {
+            self.note_cuts(earliest, h);
         }
         if earliest.is_none() {
             ws.copy_in_halves(&mut self.y1, y);
@@ -343,29 +369,6 @@ impl Events {
             Point::End(e) => at(e),
             Point::Fixed(x) => x,
         })
-    }
-}
-
-impl Events {
-    /// A grip's switch at time `theta` into the step: position and velocity from the
-    /// Hermite cubic and its derivative.
-    fn grip_along(&self, s: &GripSwitch, inputs: &Inputs, theta: f64, h: f64) -> f64 {
-        let Some(terrain) = &self.terrain else {
-            return f64::MAX;
-        };
-        let e = s.end;
-        let (x0, v0, x1, v1) = (self.x0[e], self.v0[e], self.x1[e], self.v1[e]);
-        let w = hermite(theta / h, h);
-        let x = w[0] * x0 + w[1] * v0 + w[2] * x1 + w[3] * v1;
-        let u = theta / h;
-        let dw = [
-            (6.0 * u * u - 6.0 * u) / h,
-            3.0 * u * u - 4.0 * u + 1.0,
-            (6.0 * u - 6.0 * u * u) / h,
-            3.0 * u * u - 2.0 * u,
-        ];
-        let v = dw[0] * x0 + dw[1] * v0 + dw[2] * x1 + dw[3] * v1;
-        grip::value(s, terrain, &inputs.grip, &x, &v)
     }
 }
 
