@@ -6,9 +6,9 @@
 //!   part), up to `μ N`. At rest under a load below `μ N` the spring holds it exactly: no
 //!   creep.
 //! - **Slip**: kinetic friction `f_t = −μ N ê`, with `ê` the tangential direction from the
-//!   anchor to the point. The anchor stays put while the point slides straight away from
-//!   it; once the sliding direction turns more than [`TURN`] from `ê`, the anchor moves
-//!   behind the point, onto its velocity.
+//!   anchor to the point. The anchor is set far behind the point ([`TRAIL`]) and stays
+//!   put while the point slides straight away from it; once the sliding direction turns
+//!   more than 5° from `ê`, it moves behind the point again, onto its velocity.
 //!
 //! The mode and the anchor change only between steps (`sim::grip`), where a switching
 //! function ([`switch`]) says so: stick→slip when `|f_t|` reaches `μ N`, slip→stick when
@@ -20,8 +20,9 @@ use nalgebra::Vector3;
 
 use super::Penalty;
 
-/// Shortest anchor trail in slip, m: keeps the direction defined while `μ N` is near 0.
-const MIN_TRAIL: f64 = 1e-9;
+/// How far behind the point a slip's anchor is set, m: far enough that the friction's
+/// direction, the chord from the anchor, barely moves with the structure's vibrations.
+const TRAIL: f64 = 1.0;
 
 /// The cosine of the largest angle, 5°, between the sliding direction and the direction
 /// from the anchor (that of the friction) before the anchor moves onto the velocity.
@@ -130,10 +131,9 @@ pub fn force(law: &Penalty, touch: &Touch, grip: Grip) -> Vector3<f64> {
     touch.normal * normal + friction
 }
 
-/// Positive while `grip` keeps its mode and anchor: `μ N − |f_t|` (before the cap) while
-/// it sticks; while it slips, `v_t·ê − cos 5° |v_t|`, the speed away from the anchor less
-/// that of a path turned 5° from it (it changes sign when the point stops or turns);
-/// `f64::MAX` when it is free.
+/// Positive while `grip` keeps its mode and anchor: `μ N − |f_t|` while it sticks; while it
+/// slips, the lesser of its two switching functions ([`slip_switches`]: it stops, or its
+/// path turns); `f64::MAX` when it is free.
 #[inline]
 pub fn switch(law: &Penalty, touch: &Touch, grip: Grip) -> f64 {
     match grip {
@@ -143,8 +143,8 @@ pub fn switch(law: &Penalty, touch: &Touch, grip: Grip) -> f64 {
             limit * (1.0 + STICK_SLACK) - touch.spring(law, &a).norm()
         }
         Grip::Slip(a) => {
-            let v = touch.tangential(touch.v);
-            v.dot(&touch.away(&a)) - TURN * v.norm() + SLIP_SLACK
+            let (stop, turn) = slip_switches(law, touch, &a);
+            stop.min(turn)
         }
     }
 }
@@ -158,7 +158,6 @@ pub fn next(law: &Penalty, touch: Option<&Touch>, grip: Grip, switched: bool) ->
         return Grip::Free;
     };
     let limit = law.friction * touch.normal_force(law);
-    let trail = (limit / law.stiffness).max(MIN_TRAIL);
     if let Grip::Free = grip {
         // Anchored where it first touched, unless it already slides harder than μ N holds.
         return next(law, Some(touch), Grip::Stick(*touch.x), false);
@@ -173,12 +172,12 @@ pub fn next(law: &Penalty, touch: Option<&Touch>, grip: Grip, switched: bool) ->
             let f = touch.spring(law, &a);
             let m = f.norm();
             let away = if m > 0.0 { -f / m } else { touch.away(&a) };
-            Grip::Slip(touch.x - away * trail)
+            Grip::Slip(touch.x - away * TRAIL)
         }
         // Turned: the anchor moves behind the point, onto its velocity.
-        Grip::Slip(a) if turned(touch, &touch.away(&a)) => {
+        Grip::Slip(a) if turned(law, touch, &a) => {
             let v = touch.tangential(touch.v);
-            Grip::Slip(touch.x - v * (trail / v.norm()))
+            Grip::Slip(touch.x - v * (TRAIL / v.norm()))
         }
         // Stopped: the new spring pulls as the sliding friction did,
         // `k P(x − a') = μ N ê − c v_t`.
@@ -189,13 +188,23 @@ pub fn next(law: &Penalty, touch: Option<&Touch>, grip: Grip, switched: bool) ->
     }
 }
 
-/// Whether a slip's switch fired because the path turned (it still moves away from the
-/// anchor, and across `away` by half the turn or more), not because it stopped.
-fn turned(touch: &Touch, away: &Vector3<f64>) -> bool {
+/// A slip's two switching functions, positive while it slides on: `v_t·ê` (the speed away
+/// from the anchor; zero where it stops), and `v_t·ê − cos 5° |v_t| + (1 − cos 5°) v_s`
+/// (zero where the path has turned 5° from `ê`, once faster than the shape's slip velocity
+/// `v_s`: slower wobbles of a structure sliding off do not turn it).
+fn slip_switches(law: &Penalty, touch: &Touch, anchor: &Vector3<f64>) -> (f64, f64) {
     let v = touch.tangential(touch.v);
-    let along = v.dot(away);
-    let across = (v - away * along).norm();
-    along > SLIP_SLACK && across >= 0.5 * (1.0 - TURN * TURN).sqrt() * v.norm()
+    let along = v.dot(&touch.away(anchor));
+    (
+        along + SLIP_SLACK,
+        along - TURN * v.norm() + (1.0 - TURN) * law.slip_velocity,
+    )
+}
+
+/// Whether a slip's switch fired because the path turned, not because it stopped.
+fn turned(law: &Penalty, touch: &Touch, anchor: &Vector3<f64>) -> bool {
+    let (stop, turn) = slip_switches(law, touch, anchor);
+    turn < stop
 }
 
 /// Energy in a sticking spring, `½ k |P(x − a)|²`, J.
