@@ -8,7 +8,7 @@
 //! - **Slip**: kinetic friction `f_t = −μ N ê`, with `ê` the tangential direction from the
 //!   anchor to the point. The anchor is set far behind the point ([`TRAIL`]) and stays
 //!   put while the point slides straight away from it; once the sliding direction turns
-//!   more than 5° from `ê`, it moves behind the point again, onto its velocity.
+//!   more than 10° from `ê`, it moves behind the point again, onto its velocity.
 //!
 //! The mode and the anchor change only between steps (`sim::grip`), where a switching
 //! function ([`switch`]) says so: stick→slip when `|f_t|` reaches `μ N`, slip→stick when
@@ -24,9 +24,11 @@ use super::Penalty;
 /// direction, the chord from the anchor, barely moves with the structure's vibrations.
 const TRAIL: f64 = 1.0;
 
-/// The cosine of the largest angle, 5°, between the sliding direction and the direction
-/// from the anchor (that of the friction) before the anchor moves onto the velocity.
-pub const TURN: f64 = 0.996_194_698_091_745_5;
+/// The cosine of the largest angle, 10°, between the sliding direction and the direction
+/// from the anchor (that of the friction) before the anchor moves onto the velocity: each
+/// turn is an event: a tumbling icosahedron took five times as many at 5°, a third as
+/// many at 15° (for half again the direction's error).
+pub const TURN: f64 = 0.984_807_753_012_208;
 
 /// How far past the Coulomb limit a stick may be, relative, before it slips: a stick just
 /// begun from a slip sits at the limit to round-off, and must not slip again at once.
@@ -189,8 +191,8 @@ pub fn next(law: &Penalty, touch: Option<&Touch>, grip: Grip, switched: bool) ->
 }
 
 /// A slip's two switching functions, positive while it slides on: `v_t·ê` (the speed away
-/// from the anchor; zero where it stops), and `v_t·ê − cos 5° |v_t| + (1 − cos 5°) v_s`
-/// (zero where the path has turned 5° from `ê`, once faster than the shape's slip velocity
+/// from the anchor; zero where it stops), and `v_t·ê − cos 10° |v_t| + (1 − cos 10°) v_s`
+/// (zero where the path has turned 10° from `ê`, once faster than the shape's slip velocity
 /// `v_s`: slower wobbles of a structure sliding off do not turn it).
 fn slip_switches(law: &Penalty, touch: &Touch, anchor: &Vector3<f64>) -> (f64, f64) {
     let v = touch.tangential(touch.v);
