@@ -49,7 +49,7 @@ fn per_step(seconds: f64, repeats: usize) -> Result<(), String> {
     let terrain = with_terrain(&base);
     let collide = with_collisions(&base);
     let both = with_collisions(&terrain);
-    let mut cases: Vec<(&str, Simulation, f64, u32)> = Vec::new();
+    let mut cases: Vec<(&str, Simulation, f64, (u32, u64))> = Vec::new();
     for (name, scene) in [
         ("tower20", &base),
         ("+ terrain", &terrain),
@@ -57,7 +57,7 @@ fn per_step(seconds: f64, repeats: usize) -> Result<(), String> {
         ("+ both", &both),
     ] {
         let sim = Simulation::new(Model::new(scene).map_err(|e| e.to_string())?);
-        cases.push((name, sim, f64::INFINITY, 0));
+        cases.push((name, sim, f64::INFINITY, (0, 0)));
     }
     for _ in 0..repeats {
         for case in &mut cases {
@@ -71,20 +71,25 @@ fn per_step(seconds: f64, repeats: usize) -> Result<(), String> {
          {} s replayed; best of {repeats} interleaved measurements of ≥ {seconds} s each\n",
         WINDOW as f64 * STEP
     );
-    println!("| case | µs/step | ratio to tower20 | contact points at the window's end |");
-    println!("|---|---:|---:|---:|");
+    println!(
+        "| case | µs/step | ratio to tower20 | contact points at the window's end | events located in the window |"
+    );
+    println!("|---|---:|---:|---:|---:|");
     let base_us = cases[0].2;
-    for (name, _, us, contacts) in &cases {
-        println!("| {name} | {us:.1} | {:.3} | {contacts} |", us / base_us);
+    for (name, _, us, (contacts, events)) in &cases {
+        println!(
+            "| {name} | {us:.1} | {:.3} | {contacts} | {events} |",
+            us / base_us
+        );
     }
     println!();
     Ok(())
 }
 
-/// Best µs per step over windows replayed for at least `seconds`, and the contact points
-/// (terrain and collisions) at the window's end.
-fn measure(start: &Simulation, seconds: f64) -> Result<(f64, u32), String> {
-    let (mut spent, mut steps, mut contacts) = (Duration::ZERO, 0u64, 0);
+/// Best µs per step over windows replayed for at least `seconds`, the contact points
+/// (terrain and collisions) at the window's end and the events located in a window.
+fn measure(start: &Simulation, seconds: f64) -> Result<(f64, (u32, u64)), String> {
+    let (mut spent, mut steps, mut contacts, mut events) = (Duration::ZERO, 0u64, 0, 0);
     while spent.as_secs_f64() < seconds {
         let mut sim = start.clone();
         let t0 = Instant::now();
@@ -97,8 +102,9 @@ fn measure(start: &Simulation, seconds: f64) -> Result<(f64, u32), String> {
         sim.refresh();
         let ws = sim.workspace();
         contacts = ws.shape_load.iter().map(|l| l.contacts).sum::<u32>() + ws.collision.contacts;
+        events = sim.stats().events - start.stats().events;
     }
-    Ok((spent.as_secs_f64() * 1e6 / steps as f64, contacts))
+    Ok((spent.as_secs_f64() * 1e6 / steps as f64, (contacts, events)))
 }
 
 /// A tower as the benchmark runs it: no inputs, gravity, capsules, rk4 at 0.5 ms.

@@ -45,10 +45,11 @@ pub(super) fn grip_switches(model: &Model) -> Vec<GripSwitch> {
     let Some(terrain) = &model.terrain else {
         return Vec::new();
     };
+    // End by end, so that the grips of one end follow each other.
     let mut out = Vec::new();
     for (c, cap) in terrain.capsules.iter().enumerate() {
-        for (shape, &sticks) in terrain.sticks.iter().enumerate() {
-            for (i, end) in cap.ends.iter().enumerate() {
+        for (i, end) in cap.ends.iter().enumerate() {
+            for (shape, &sticks) in terrain.sticks.iter().enumerate() {
                 if let (true, Some(end)) = (sticks, *end) {
                     out.push(GripSwitch {
                         slot: terrain.grip(c, shape, i),
@@ -121,11 +122,23 @@ impl Simulation {
         let (q, qd) = self.state.y.split_at(half);
         let coords = &self.model.coords;
         let cuts = if at_cut { self.events.cuts() } else { &[] };
+        let mut at: Option<(usize, Vector3<f64>, Vector3<f64>)> = None;
         for (j, s) in self.events.grip_switches().iter().enumerate() {
-            let x = coords.end_vector(s.end, q, true);
-            let v = coords.end_vector(s.end, qd, false);
-            let law = &terrain.shapes[s.shape].1;
             let grip = &mut self.inputs.grip[s.slot];
+            let (shape, law) = &terrain.shapes[s.shape];
+            let x = match at {
+                Some((end, x, _)) if end == s.end => x,
+                _ => coords.end_vector(s.end, q, true),
+            };
+            // A free end far from the shape stays free (a bounds test, not a distance).
+            if *grip == Grip::Free && cuts.is_empty() && !shape.may_touch(&x, &x, s.radius) {
+                continue;
+            }
+            let v = match at {
+                Some((end, _, v)) if end == s.end => v,
+                _ => coords.end_vector(s.end, qd, false),
+            };
+            at = Some((s.end, x, v));
             let switched = cuts.contains(&Cut::Grip(j));
             let onset = cuts.iter().find_map(|c| match *c {
                 Cut::Touch {

@@ -20,7 +20,7 @@ mod grips;
 
 use super::grip::{Cut, GripSwitch};
 use super::locate::{crossing, hermite};
-use crate::contact::{interior_excess, Shape};
+use crate::contact::{interior_excess, Grip, Shape};
 use crate::dynamics::{Inputs, Workspace};
 use crate::model::effects::{CableLink, ForceEffect};
 use crate::model::terrain::Terrain;
@@ -268,12 +268,14 @@ impl Events {
                 ws,
             );
         }
-        if !self.grips.is_empty() {
+        if holding(inputs) {
             let half = y.len() / 2;
             end_velocities(model, &y[half..], &mut self.v0);
             let mut signs = std::mem::take(&mut self.grip0);
             self.grip_signs(inputs, &self.x0, &self.v0, &mut signs);
             self.grip0 = signs;
+        } else {
+            self.grip0.fill(true);
         }
         self.end_known = false;
     }
@@ -304,7 +306,7 @@ impl Events {
         self.crossed.clear();
         self.cuts.clear();
         self.grips_changed = false;
-        if !self.grips.is_empty() {
+        if holding(inputs) {
             let half = y.len() / 2;
             end_velocities(model, &y[half..], &mut self.v1);
             velocities = true;
@@ -370,6 +372,11 @@ impl Events {
             Point::Fixed(x) => x,
         })
     }
+}
+
+/// Whether any grip sticks or slips (a free grip's switch is always positive).
+fn holding(inputs: &Inputs) -> bool {
+    inputs.grip.iter().any(|g| *g != Grip::Free)
 }
 
 /// Bar-end positions of the state `y = [q; q̇]` (on two threads where the evaluation has
