@@ -206,7 +206,7 @@ fn slip_switches(law: &Penalty, touch: &Touch, anchor: &Vector3<f64>) -> (f64, f
 /// Whether a slip's switch fired because the path turned, not because it stopped.
 fn turned(law: &Penalty, touch: &Touch, anchor: &Vector3<f64>) -> bool {
     let (stop, turn) = slip_switches(law, touch, anchor);
-    turn < stop
+    turn < stop && touch.tangential(touch.v).norm() > 0.0
 }
 
 /// Energy in a sticking spring, `½ k |P(x − a)|²`, J.

@@ -111,13 +111,12 @@ impl Simulation {
     /// Moves every grip on to the current state (after a kept step, or a new state;
     /// `at_cut` if a located event cut the step short, which then switches the grips whose
     /// switches it crossed). Values the integrator carries were computed with the old
-    /// grips: a new mode drops them (a trailing anchor moved along its direction leaves the
-    /// force where it is).
+    /// grips: any change drops them (a grip only changes where its force law does).
     pub(super) fn update_grips(&mut self, at_cut: bool) {
         let Some(terrain) = &self.model.terrain else {
             return;
         };
-        let (mut moved, mut new_mode) = (false, false);
+        let mut moved = false;
         let half = self.state.y.len() / 2;
         let (q, qd) = self.state.y.split_at(half);
         let coords = &self.model.coords;
@@ -156,13 +155,10 @@ impl Simulation {
                 })
             };
             moved |= next != *grip;
-            new_mode |= std::mem::discriminant(&next) != std::mem::discriminant(grip);
             *grip = next;
         }
-        if new_mode {
-            self.integrator.invalidate();
-        }
         if moved {
+            self.integrator.invalidate();
             self.stepped_inputs.grip.copy_from_slice(&self.inputs.grip);
         }
     }

@@ -22,6 +22,7 @@ impl Snapshot {
     /// state's parameters give.
     pub(in crate::fmi) fn check(&self, core: &Core) -> Result<Scene, String> {
         self.check_sizes(core)?;
+        self.check_grips(core)?;
         self.check_flow()?;
         let scene = self.check_parameters(core)?;
         self.check_integrator(&scene)?;
@@ -98,6 +99,28 @@ impl Snapshot {
                     "time = {} s is past its stop time {} s (allowed: time ≤ stop time)",
                     shortest(self.time),
                     shortest(stop)
+                ));
+            }
+        }
+        Ok(())
+    }
+
+    /// A grip holds only where a bar end can grip: on a shape whose friction sticks, at an
+    /// end that moves.
+    fn check_grips(&self, core: &Core) -> Result<(), String> {
+        let Some(terrain) = &core.sim.model().terrain else {
+            return Ok(());
+        };
+        let per_capsule = 2 * terrain.shapes.len();
+        for (k, grip) in self.grips().iter().enumerate() {
+            let (capsule, shape, end) = (k / per_capsule, k % per_capsule / 2, k % 2);
+            let can = terrain.sticks[shape] && terrain.capsules[capsule].ends[end].is_some();
+            if !can && *grip != crate::contact::Grip::Free {
+                return Err(format!(
+                    "friction grip {} holds where nothing grips (terrain[{}] with \
+                     friction_model = \"regularized\", or a pinned end; allowed: mode 0 there)",
+                    k + 1,
+                    shape + 1
                 ));
             }
         }

@@ -72,7 +72,7 @@ impl Snapshot {
     }
 
     /// The grips the values hold (checked when they were read).
-    fn grips(&self) -> Vec<Grip> {
+    pub(super) fn grips(&self) -> Vec<Grip> {
         self.grips
             .as_chunks::<4>()
             .0

@@ -42,7 +42,7 @@ impl Events {
         }
         let (lo, hi) = (EDGE * h, (1.0 - EDGE) * h);
         for (j, s) in self.grips.iter().enumerate() {
-            if self.grip0[j] == self.grip1[j] {
+            if !self.grip0[j] || self.grip1[j] {
                 continue;
             }
             let g = |theta: f64| self.grip_along(s, inputs, theta, h);

@@ -313,7 +313,8 @@ impl Events {
             let mut signs = std::mem::take(&mut self.grip1);
             self.grip_signs(inputs, &self.x1, &self.v1, &mut signs);
             self.grip1 = signs;
-            self.grips_changed = self.grip0 != self.grip1;
+            // Only a switch turning negative changes a grip's mode.
+            self.grips_changed = self.grip0.iter().zip(&self.grip1).any(|(&a, &b)| a && !b);
         }
         for (j, s) in self.switches.iter().enumerate() {
             if self.positive0[j] == self.positive1[j] {
