@@ -28,7 +28,7 @@ const TRAIL: f64 = 1.0;
 /// from the anchor (that of the friction) before the anchor moves onto the velocity: each
 /// turn is an event: a tumbling icosahedron took five times as many at 5°, a third as
 /// many at 15° (for half again the direction's error).
-pub const TURN: f64 = 0.984_807_753_012_208;
+const TURN: f64 = 0.984_807_753_012_208;
 
 /// How far past the Coulomb limit a stick may be, relative, before it slips: a stick just
 /// begun from a slip sits at the limit to round-off, and must not slip again at once.
@@ -69,11 +69,6 @@ impl Grip {
             _ => None,
         }
     }
-
-    /// Whether it sticks.
-    pub fn sticks(self) -> bool {
-        matches!(self, Self::Stick(_))
-    }
 }
 
 /// One contact point as the law sees it.
@@ -92,7 +87,7 @@ pub struct Touch<'a> {
 impl Touch<'_> {
     /// The normal force `N = max(0, k d − c n·v)`, N.
     fn normal_force(&self, law: &Penalty) -> f64 {
-        (law.stiffness * self.depth - law.damping * self.normal.dot(self.v)).max(0.0)
+        law.normal_force(self.depth, self.normal.dot(self.v))
     }
 
     /// The tangential part of `w`.
@@ -100,7 +95,7 @@ impl Touch<'_> {
         w - self.normal * self.normal.dot(w)
     }
 
-    /// The stick spring's force before the cap, N.
+    /// The stick spring's force, N.
     fn spring(&self, law: &Penalty, anchor: &Vector3<f64>) -> Vector3<f64> {
         -(self.tangential(&(self.x - anchor)) * law.stiffness
             + self.tangential(self.v) * law.damping)

@@ -17,12 +17,18 @@ pub struct Penalty {
 }
 
 impl Penalty {
+    /// The normal force `max(0, k d − c v_n)` at depth `d` approaching at `v_n`, N.
+    #[inline]
+    pub fn normal_force(&self, depth: f64, vn: f64) -> f64 {
+        (self.stiffness * depth - self.damping * vn).max(0.0)
+    }
+
     /// The force on a point at depth `d > 0` moving with `v` against a surface of outward
     /// normal `n`: `n max(0, k d − c n·v) − μ f_n v_t / max(|v_t|, v_s)`, N.
     #[inline]
     pub fn force(&self, depth: f64, n: &Vector3<f64>, v: &Vector3<f64>) -> Vector3<f64> {
         let vn = n.dot(v);
-        let fn_ = (self.stiffness * depth - self.damping * vn).max(0.0);
+        let fn_ = self.normal_force(depth, vn);
         let vt = v - n * vn;
         let friction = self.friction * fn_ / vt.norm().max(self.slip_velocity);
         n * fn_ - vt * friction
