@@ -103,7 +103,7 @@ fn pushed_bar(h: f64, locate: bool, time: f64) -> (Vector3<f64>, u64) {
 }
 
 #[test]
-fn located_stick_slip_switches_keep_rk4_error_falling_as_h_cubed() {
+fn located_stick_slip_switches_keep_rk4_fourth_order() {
     let time = 1.0;
     let (reference, _) = pushed_bar(1.0 / 32000.0, true, time);
     let steps = [1.0 / 1000.0, 1.0 / 2000.0, 1.0 / 4000.0, 1.0 / 8000.0];
@@ -119,7 +119,7 @@ fn located_stick_slip_switches_keep_rk4_error_falling_as_h_cubed() {
     let orders: Vec<f64> = located.windows(2).map(|e| (e[0] / e[1]).log2()).collect();
     println!("observed orders located {orders:.2?}");
     assert_eq!(events, 3, "slip, stick, slip again");
-    assert!(orders.iter().all(|&p| p > 2.8), "orders {orders:?}");
+    assert!(orders.iter().all(|&p| p > 3.5), "orders {orders:?}");
     assert!(
         unlocated[2] > 1e4 * located[2],
         "switching only at step ends costs orders: {unlocated:?} vs {located:?}"

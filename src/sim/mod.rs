@@ -348,14 +348,28 @@ impl Simulation {
         &self.ws
     }
 
-    /// Position of node `n` (0-based), m.
+    /// Position of node `n` (0-based), m, in the current state (not the last evaluation,
+    /// which after a step is the method's last stage).
     pub fn node_position(&self, n: usize) -> Vector3<f64> {
-        self.ws.node_pos[n]
+        self.node_vector(n, true)
     }
 
-    /// Velocity of node `n` (0-based), m/s.
+    /// Velocity of node `n` (0-based), m/s, in the current state.
     pub fn node_velocity(&self, n: usize) -> Vector3<f64> {
-        self.ws.node_vel[n]
+        self.node_vector(n, false)
+    }
+
+    /// A node's position (`position`) or velocity from the state; a node on no bar is
+    /// fixed where the workspace holds it.
+    fn node_vector(&self, n: usize, position: bool) -> Vector3<f64> {
+        let half = self.state.y.len() / 2;
+        let (q, v) = self.state.y.split_at(half);
+        match self.model.coords.node_end[n] {
+            Some(e) if position => self.model.coords.end_vector(e, q, true),
+            Some(e) => self.model.coords.end_vector(e, v, false),
+            None if position => self.ws.node_pos[n],
+            None => self.ws.node_vel[n],
+        }
     }
 
     /// Acceleration of node `n` (0-based), m/s², from the last evaluation.
@@ -363,7 +377,7 @@ impl Simulation {
         self.model.coords.node_end[n].map_or(Vector3::zeros(), |e| self.ws.end_acc[e])
     }
 
-    /// Tension of cable `j` (0-based), N.
+    /// Tension of cable `j` (0-based), N, from the last evaluation.
     pub fn cable_tension(&self, j: usize) -> f64 {
         let [a, b] = self.model.cables[j].nodes;
         self.ws.gamma[j] * (self.ws.node_pos[b] - self.ws.node_pos[a]).norm()
