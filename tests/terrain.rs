@@ -183,8 +183,14 @@ fn tipped_bar_run(h: f64, locate: bool, time: f64) -> (Vec<Vector3<f64>>, u64) {
     // A bar falling tilted onto a box's edge (its side lands first), frictionless and
     // undamped, so it lands, pivots, bounces and flies on.
     let edge = terrain_box([-0.5, 0.0, 0.25], [1.0, 1.0, 0.5], 1e4, 0.0, 0.0);
-    let text = bar_scene([-0.3, 0.0, 0.66], [0.7, 0.0, 0.56], 1.0, 0.02, &edge)
-        + &format!("[solver]\nmethod = \"rk4\"\nstep_size = {h}\nlocate_events = {locate}\n");
+    let text = bar_scene([-0.3, 0.0, 0.66], [0.7, 0.0, 0.56], 1.0, 0.02, &edge);
+    rk4_run(text, h, locate, time)
+}
+
+/// The bar of `text` after `time` of rk4 steps of `h`: its nodes and the located events.
+fn rk4_run(text: String, h: f64, locate: bool, time: f64) -> (Vec<Vector3<f64>>, u64) {
+    let text =
+        text + &format!("[solver]\nmethod = \"rk4\"\nstep_size = {h}\nlocate_events = {locate}\n");
     let mut s = sim(&text);
     let steps = (time / h).round() as u64;
     for k in 0..steps {
@@ -286,4 +292,36 @@ fn a_capsule_landing_on_the_ground_is_a_located_event() {
         "it lands on its capsule: {lowest}"
     );
     assert!(s.stats().events >= 1, "the landing was located");
+}
+
+/// Node positions after `time` of rk4 at `h` for a level bar (1 m, 2 cm capsule) dropped
+/// from 4 cm above a plane, and the located events.
+fn level_bar_run(h: f64, time: f64) -> (Vec<Vector3<f64>>, u64) {
+    let plane = "[[terrain]]\nkind = \"plane\"\npoint = [0.0, 0.0, 0.0]\n\
+                 stiffness = 1e4\ndamping = 0.0\nfriction = 0.0\n";
+    let text = bar_scene([0.0, 0.0, 0.06], [1.0, 0.0, 0.06], 1.0, 0.02, plane);
+    rk4_run(text, h, true, time)
+}
+
+#[test]
+fn a_landing_from_beyond_the_margin_keeps_rk4_fourth_order() {
+    // The bar starts farther from the plane (4 cm) than the terrain's marks reach (half
+    // of a twentieth of its length): its ends are skipped as far until it has fallen
+    // 2.5 cm, and the landing must still be found.
+    let time = 0.15;
+    let (reference, events) = level_bar_run(1e-5, time);
+    assert!(events >= 2, "{events}: the ends never landed");
+    let mut errors = Vec::new();
+    for h in [1e-3, 5e-4, 2.5e-4] {
+        let (x, events) = level_bar_run(h, time);
+        let e = (0..2)
+            .map(|n| (x[n] - reference[n]).norm())
+            .fold(0.0, f64::max);
+        println!("rk4 {h:.2e} s: error {e:.3e} m, {events} events");
+        assert!(events >= 2, "{events}: the landing was not located");
+        errors.push(e);
+    }
+    let orders: Vec<f64> = errors.windows(2).map(|w| (w[0] / w[1]).log2()).collect();
+    println!("observed orders {orders:.2?}");
+    assert!(orders.iter().all(|&o| o >= 3.3), "orders {orders:.2?}");
 }

@@ -6,8 +6,8 @@
 
 use nalgebra::Vector3;
 use tensegrity_fmu::contact::capsule::KINK_SLACK;
-use tensegrity_fmu::contact::{Grid, Grip, Penalty, Shape};
-use tensegrity_fmu::dynamics::terrain::{apply, capsule_forces, TerrainSink};
+use tensegrity_fmu::contact::{Grid, Grip, Penalty, Proximity, Shape};
+use tensegrity_fmu::dynamics::terrain::{apply, capsule_forces, mark_far, TerrainSink};
 use tensegrity_fmu::model::terrain::{Capsule, Terrain};
 use tensegrity_fmu::scene::Scene;
 use tensegrity_fmu::{Model, Simulation};
@@ -180,7 +180,7 @@ fn random_terrain(rng: &mut Rng) -> Vec<(Shape, Penalty)> {
 fn end_forces_have_the_contacts_resultant_and_moment() {
     let mut rng = Rng(0x7e45_e961);
     let (bars, trials) = (40, 25);
-    let (mut interior, mut checked) = (0, 0);
+    let (mut interior, mut checked, mut far) = (0, 0, 0);
     for _ in 0..trials {
         let shapes = random_terrain(&mut rng);
         // Bars of 0.3–2 m around the terrain's surface, each with its own two nodes, moving.
@@ -209,13 +209,25 @@ fn end_forces_have_the_contacts_resultant_and_moment() {
             shapes,
             capsules,
             sticks,
+            margin: 0.2,
         };
         let grips = vec![Grip::Free; terrain.grips()];
         let mut sink = Ends {
             force: vec![Vector3::zeros(); 2 * bars],
             shapes: Vector3::zeros(),
         };
-        apply(&terrain, &grips, (&x, &v), &mut sink);
+        // The far marks set where every node was up to just under half the margin away:
+        // they still hold, and must not drop a contact that the full test below finds.
+        let marked: Vec<_> = x
+            .iter()
+            .map(|p| p + rng.vector(-1.0, 1.0).normalize() * rng.range(0.0, 0.0999))
+            .collect();
+        let mut near = Proximity::default();
+        mark_far(&terrain, &marked, &mut near);
+        far += (0..terrain.capsules.len() * terrain.shapes.len())
+            .filter(|&i| near.is_far(i))
+            .count();
+        apply(&terrain, &grips, &near, (&x, &v), &mut sink);
 
         let mut total = Vector3::zeros();
         for cap in &terrain.capsules {
@@ -230,6 +242,7 @@ fn end_forces_have_the_contacts_resultant_and_moment() {
                 [&v[na], &v[nb]],
                 cap.radius,
                 &grips[..2 * terrain.shapes.len()],
+                |_| false,
                 |_, s, f| {
                     force += f;
                     moment += (a + (b - a) * s - p).cross(&f);
@@ -266,7 +279,10 @@ fn end_forces_have_the_contacts_resultant_and_moment() {
         );
     }
     // The terrain touches bars on their sides, not only at their ends.
-    println!("{checked} touching bars, {interior} contacts between the ends");
+    println!(
+        "{checked} touching bars, {interior} contacts between the ends, {far} pairs marked far"
+    );
     assert!(checked >= 200, "{checked} touching bars");
+    assert!(far >= 500, "{far} capsule–shape pairs skipped as far");
     assert!(interior >= 200, "{interior} interior contacts");
 }

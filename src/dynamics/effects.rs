@@ -7,6 +7,7 @@ use nalgebra::Vector3;
 use super::collisions::CollisionScratch;
 use super::terrain::{ShapeLoad, TerrainSink};
 use super::{Inputs, Workspace};
+use crate::contact::Proximity;
 pub use crate::model::effects::{CableLink, ConstraintEffect, ForceEffect, Pipeline, Target};
 use crate::model::Model;
 
@@ -20,6 +21,7 @@ pub fn applied_forces(model: &Model, inputs: &Inputs, t: f64, ws: &mut Workspace
         contact_force: &mut ws.contact_force,
         shape_load: &mut ws.shape_load,
         collision: &mut ws.collision,
+        terrain_near: &mut ws.terrain_near,
     };
     let nodes = (ws.node_pos.as_slice(), ws.node_vel.as_slice());
     apply(&model.pipeline.forces, inputs, t, nodes, &mut sink);
@@ -38,6 +40,8 @@ pub(super) trait ForceSink {
     fn shape_loads(&mut self) -> &mut [ShapeLoad];
     /// The broad phase's buffers and the collisions found.
     fn collision(&mut self) -> &mut CollisionScratch;
+    /// The terrain contacts too far to touch soon.
+    fn terrain_near(&mut self) -> &mut Proximity;
 }
 
 /// The whole of each output.
@@ -47,6 +51,7 @@ pub(super) struct Slices<'a> {
     pub contact_force: &'a mut [Vector3<f64>],
     pub shape_load: &'a mut [ShapeLoad],
     pub collision: &'a mut CollisionScratch,
+    pub terrain_near: &'a mut Proximity,
 }
 
 impl ForceSink for Slices<'_> {
@@ -67,6 +72,9 @@ impl ForceSink for Slices<'_> {
     }
     fn collision(&mut self) -> &mut CollisionScratch {
         self.collision
+    }
+    fn terrain_near(&mut self) -> &mut Proximity {
+        self.terrain_near
     }
 }
 
@@ -147,7 +155,12 @@ pub(super) fn apply(
             }
             ForceEffect::Terrain(terrain) => {
                 sink.shape_loads().fill(ShapeLoad::default());
-                super::terrain::apply(terrain, &inputs.grip, nodes, &mut IntoSink(sink));
+                // The marks are taken out while the sink receives the forces.
+                let mut near = std::mem::take(sink.terrain_near());
+                super::terrain::mark_far(terrain, nodes.0, &mut near);
+                let grips = &inputs.grip;
+                super::terrain::apply(terrain, grips, &near, nodes, &mut IntoSink(sink));
+                *sink.terrain_near() = near;
             }
             ForceEffect::Collisions(collisions) => {
                 // The scratch is taken out while the sink receives the forces.
@@ -327,6 +340,7 @@ mod tests {
             contact_force: &mut [],
             shape_load: &mut [],
             collision: &mut CollisionScratch::default(),
+            terrain_near: &mut Proximity::default(),
         };
         elastic_cables(&cables, &x, &mut sink);
 

@@ -101,6 +101,8 @@ pub struct Workspace {
     pub shape_load: Vec<terrain::ShapeLoad>,
     /// The collision broad phase's buffers and what it found.
     pub collision: collisions::CollisionScratch,
+    /// Which capsule–shape pairs are too far from each other to touch soon.
+    pub terrain_near: crate::contact::Proximity,
     /// Per bar, what the second λ pass needs, and `b` and `1/|b|²` for K's assembly after
     /// the first (K's bundles, deferred blocks, again after a failed factor).
     bars: Vec<BarKept>,
@@ -180,6 +182,7 @@ impl Workspace {
             collision: collisions::CollisionScratch::new(
                 model.collisions.as_ref().map_or(0, |c| c.capsules.len()),
             ),
+            terrain_near: crate::contact::Proximity::default(),
             bars: vec![(Vector3::zeros(), 0.0, 1.0, 1.0); model.bars.len()],
             reactions: model.reactions.clone(),
             dense_fallbacks: 0,

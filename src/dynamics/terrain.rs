@@ -7,7 +7,7 @@
 
 use nalgebra::{Matrix3, Vector3};
 
-use crate::contact::{capsule_contacts, grip, Grip};
+use crate::contact::{capsule_contacts, grip, Grip, Proximity};
 use crate::model::terrain::{Capsule, Terrain};
 
 /// What one shape does to the structure: its total force and how many points touch it.
@@ -20,17 +20,23 @@ pub struct ShapeLoad {
 }
 
 /// Calls `each(shape, s, f)` for every contact force of one capsule with its end nodes
-/// at `x` moving with `v`, its ends held by `grips` (the capsule's, shape by shape).
+/// at `x` moving with `v`, its ends held by `grips` (the capsule's, shape by shape), but
+/// on the shapes that `far` says it cannot touch.
 #[inline]
+#[allow(clippy::too_many_arguments)]
 pub fn capsule_forces(
     terrain: &Terrain,
     x: [&Vector3<f64>; 2],
     v: [&Vector3<f64>; 2],
     radius: f64,
     grips: &[Grip],
+    far: impl Fn(usize) -> bool,
     mut each: impl FnMut(usize, f64, Vector3<f64>),
 ) {
     for (k, (shape, law)) in terrain.shapes.iter().enumerate() {
+        if far(k) {
+            continue;
+        }
         let sticks = terrain.sticks[k];
         capsule_contacts(shape, x[0], x[1], radius, |c| {
             let f = match c.end {
@@ -65,15 +71,35 @@ pub trait TerrainSink {
     fn shape(&mut self, shape: usize, f: Vector3<f64>);
 }
 
-/// Every capsule's contact forces, for the node positions and velocities `(x, ẋ)`.
+/// Brings the marks of the capsule–shape pairs (`c · shapes + k`) too far to touch up to
+/// the node positions `x`.
+#[inline]
+pub fn mark_far(terrain: &Terrain, x: &[Vector3<f64>], near: &mut Proximity) {
+    let n = terrain.shapes.len();
+    near.update(x, terrain.margin, terrain.capsules.len() * n, |i, grow| {
+        let cap = &terrain.capsules[i / n];
+        let [a, b] = cap.nodes;
+        !terrain.shapes[i % n]
+            .0
+            .may_touch(&x[a], &x[b], cap.radius + grow)
+    });
+}
+
+/// Every capsule's contact forces, for the node positions and velocities `(x, ẋ)`, but for
+/// the pairs marked far.
 #[inline]
 pub fn apply(
     terrain: &Terrain,
     grips: &[Grip],
+    near: &Proximity,
     nodes: (&[Vector3<f64>], &[Vector3<f64>]),
     sink: &mut impl TerrainSink,
 ) {
+    let n = terrain.shapes.len();
     for (c, cap) in terrain.capsules.iter().enumerate() {
+        if (0..n).all(|k| near.is_far(c * n + k)) {
+            continue;
+        }
         let Capsule {
             nodes: [a, b],
             ends,
@@ -82,7 +108,8 @@ pub fn apply(
         } = *cap;
         let (x, v) = ([&nodes.0[a], &nodes.0[b]], [&nodes.1[a], &nodes.1[b]]);
         let grips = capsule_grips(terrain, grips, c);
-        capsule_forces(terrain, x, v, radius, grips, |k, s, f| {
+        let far = |k: usize| near.is_far(c * n + k);
+        capsule_forces(terrain, x, v, radius, grips, far, |k, s, f| {
             if let Some(e) = ends[0] {
                 sink.add(e, f * (1.0 - s));
             }
@@ -112,6 +139,7 @@ pub fn capsule_derivatives(
             [&v[0], &v[1]],
             radius,
             grips,
+            |_| false,
             |_, s, g| {
                 f[0] += g * (1.0 - s);
                 f[1] += g * s;

@@ -238,9 +238,14 @@ impl Model {
                 radius: b.radius,
             })
             .collect();
+        // A twentieth of the mean bar (at least the widest radius): the terrain's marks and
+        // the collisions' broad phase are renewed every few centimetres of motion for a
+        // robot's metre-long bars.
+        let margin = (0.05 * bars.iter().map(|b| b.length).sum::<f64>() / bars.len() as f64)
+            .max(bars.iter().map(|b| b.radius).fold(0.0, f64::max));
         let terrain = (!scene.terrain.is_empty()).then(|| {
             let moving = capsules.iter().filter(|c| !coords.static_bar[c.bar]);
-            Terrain::new(&scene.terrain, moving.copied().collect())
+            Terrain::new(&scene.terrain, moving.copied().collect(), margin)
         });
         let collisions = scene.collisions.as_ref().map(|c| Collisions {
             law: Penalty {
@@ -249,10 +254,7 @@ impl Model {
                 friction: c.friction,
                 slip_velocity: c.slip_velocity,
             },
-            // A twentieth of the mean bar (at least the widest radius): a broad phase
-            // every few centimetres of motion for a robot's metre-long bars.
-            margin: (0.05 * bars.iter().map(|b| b.length).sum::<f64>() / bars.len() as f64)
-                .max(bars.iter().map(|b| b.radius).fold(0.0, f64::max)),
+            margin,
             capsules,
         });
         let mut reactions = Reactions::new(&coords, &inertia, basis == BasisKind::Dense);

@@ -26,11 +26,14 @@ pub struct Terrain {
     pub capsules: Vec<Capsule>,
     /// Per shape, whether friction at the capsules' ends sticks (a grip per end).
     pub sticks: Vec<bool>,
+    /// How far beyond touching a capsule is watched, m: contacts farther away are skipped
+    /// until a node has moved half of it ([`crate::contact::Proximity`]).
+    pub margin: f64,
 }
 
 impl Terrain {
     /// The terrain of validated specs for the given capsules.
-    pub fn new(specs: &[TerrainSpec], capsules: Vec<Capsule>) -> Self {
+    pub fn new(specs: &[TerrainSpec], capsules: Vec<Capsule>, margin: f64) -> Self {
         let shapes = specs
             .iter()
             .map(|t| {
@@ -51,6 +54,7 @@ impl Terrain {
             shapes,
             capsules,
             sticks,
+            margin,
         }
     }
 

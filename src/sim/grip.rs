@@ -121,15 +121,20 @@ impl Simulation {
         let (q, qd) = self.state.y.split_at(half);
         let coords = &self.model.coords;
         let cuts = if at_cut { self.events.cuts() } else { &[] };
+        let marked = cuts.is_empty() && self.events.marks_hold_at(&self.state.y);
         let mut at: Option<(usize, Vector3<f64>, Vector3<f64>)> = None;
         for (j, s) in self.events.grip_switches().iter().enumerate() {
             let grip = &mut self.inputs.grip[s.slot];
+            // A free end far from the shape stays free: marked so by the events, else by a
+            // bounds test (not a distance).
+            if *grip == Grip::Free && marked && self.events.grip_far(j) {
+                continue;
+            }
             let (shape, law) = &terrain.shapes[s.shape];
             let x = match at {
                 Some((end, x, _)) if end == s.end => x,
                 _ => coords.end_vector(s.end, q, true),
             };
-            // A free end far from the shape stays free (a bounds test, not a distance).
             if *grip == Grip::Free && cuts.is_empty() && !shape.may_touch(&x, &x, s.radius) {
                 continue;
             }

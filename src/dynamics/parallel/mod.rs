@@ -92,6 +92,9 @@ impl ForceSink for HalfSink {
     fn collision(&mut self) -> &mut super::collisions::CollisionScratch {
         unreachable!("collisions are applied after the halves")
     }
+    fn terrain_near(&mut self) -> &mut crate::contact::Proximity {
+        unreachable!("terrain contact is applied after the halves")
+    }
 }
 
 /// [`super::evaluate`] on two threads (the sparse basis, see [`Halves::new`]): this one and
@@ -163,6 +166,7 @@ pub(super) fn evaluate(
                     contact_force: &mut ws.contact_force,
                     shape_load: &mut ws.shape_load,
                     collision: &mut ws.collision,
+                    terrain_near: &mut ws.terrain_near,
                 };
                 effects::apply(&halves.after, inputs, t, nodes, &mut sink);
             }

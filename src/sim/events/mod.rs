@@ -16,11 +16,12 @@
 
 use nalgebra::Vector3;
 
+mod far;
 mod grips;
 
 use super::grip::{Cut, GripSwitch};
 use super::locate::{crossing, hermite};
-use crate::contact::{interior_excess, Grip, Shape};
+use crate::contact::{interior_excess, Grip, Proximity, Shape};
 use crate::dynamics::{Inputs, Workspace};
 use crate::model::effects::{CableLink, ForceEffect};
 use crate::model::terrain::Terrain;
@@ -91,6 +92,11 @@ pub struct Events {
     switches: Vec<Switch>,
     /// The terrain shapes the terrain switches name.
     shapes: Vec<Shape>,
+    /// The terrain switches too far from their shapes to change sign soon, the terrain's
+    /// margin (0: no terrain), and each grip's switch of touch (`far::grip_touches`).
+    near: Proximity,
+    margin: f64,
+    grip_touch: Vec<usize>,
     /// The friction grips' switches, the terrain they are on, and their signs at both ends
     /// of the step (always taken with the velocities: the grips move between steps).
     grips: Vec<GripSwitch>,
@@ -210,6 +216,9 @@ impl Events {
         let grips = super::grip::grip_switches(model);
         Self {
             shapes,
+            near: Proximity::default(),
+            margin: model.terrain.as_ref().map_or(0.0, |t| t.margin),
+            grip_touch: far::grip_touches(&switches, &grips),
             terrain: model.terrain.clone().filter(|_| !grips.is_empty()),
             grip0: vec![false; grips.len()],
             grip1: vec![false; grips.len()],
@@ -259,9 +268,10 @@ impl Events {
             std::mem::swap(&mut self.positive0, &mut self.positive1);
         } else {
             end_positions(model, y, &mut self.x0, ws);
+            self.mark_far(false);
             signs(
                 &self.switches,
-                &self.shapes,
+                (&self.shapes, &self.near),
                 inputs,
                 &self.x0,
                 &mut self.positive0,
@@ -292,9 +302,10 @@ impl Events {
         ws: &Workspace,
     ) -> Option<f64> {
         end_positions(model, y, &mut self.x1, ws);
+        self.mark_far(true);
         signs(
             &self.switches,
-            &self.shapes,
+            (&self.shapes, &self.near),
             inputs,
             &self.x1,
             &mut self.positive1,
@@ -387,18 +398,19 @@ fn end_positions(model: &Model, y: &[f64], x: &mut [Vector3<f64>], ws: &Workspac
     ws.for_each_half(x, |start, x| model.coords.end_positions(start, q, x));
 }
 
-/// Whether each switch is positive at the bar-end positions `x` (as [`end_positions`]).
+/// Whether each switch is positive at the bar-end positions `x` (as [`end_positions`]);
+/// those marked far are.
 fn signs(
     switches: &[Switch],
-    shapes: &[Shape],
+    (shapes, near): (&[Shape], &Proximity),
     inputs: &Inputs,
     x: &[Vector3<f64>],
     out: &mut [bool],
     ws: &Workspace,
 ) {
     ws.for_each_half(out, |start, out| {
-        for (p, s) in out.iter_mut().zip(&switches[start..]) {
-            *p = positive(s, shapes, inputs, x);
+        for (i, (p, s)) in out.iter_mut().zip(&switches[start..]).enumerate() {
+            *p = near.is_far(start + i) || positive(s, shapes, inputs, x);
         }
     });
 }

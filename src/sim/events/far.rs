@@ -1,0 +1,78 @@
+//! Terrain switches too far from their shapes to change sign before a bar end has moved
+//! half the terrain's margin: their signs are positive without computing them.
+
+use nalgebra::Vector3;
+
+use super::{Events, Point, Switch};
+use crate::contact::{Proximity, Shape};
+use crate::sim::grip::GripSwitch;
+
+/// Brings the far marks of `switches` (by index) up to the bar-end positions `x`.
+pub(super) fn mark_far(
+    switches: &[Switch],
+    shapes: &[Shape],
+    x: &[Vector3<f64>],
+    margin: f64,
+    near: &mut Proximity,
+) {
+    let at = |p: Point| match p {
+        Point::End(e) => x[e],
+        Point::Fixed(x) => x,
+    };
+    near.update(x, margin, switches.len(), |i, grow| match switches[i] {
+        Switch::TerrainEnd {
+            at: p,
+            shape,
+            radius,
+        } => {
+            let p = at(p);
+            !shapes[shape].may_touch(&p, &p, radius + grow)
+        }
+        Switch::TerrainSide {
+            a,
+            b,
+            shape,
+            radius,
+        } => !shapes[shape].may_touch(&at(a), &at(b), radius + grow),
+        Switch::Cable { .. } | Switch::Ground { .. } => false,
+    });
+}
+
+/// For each grip, the index of its end's touch switch on its shape.
+pub(super) fn grip_touches(switches: &[Switch], grips: &[GripSwitch]) -> Vec<usize> {
+    grips
+        .iter()
+        .map(|g| {
+            let touch = |s: &Switch| {
+                matches!(*s, Switch::TerrainEnd { at: Point::End(e), shape, .. }
+                    if e == g.end && shape == g.shape)
+            };
+            switches
+                .iter()
+                .position(touch)
+                .expect("a grip's end has a touch switch")
+        })
+        .collect()
+}
+
+impl Events {
+    /// Brings the far marks up to the step's end positions (`end`) or its start's.
+    pub(super) fn mark_far(&mut self, end: bool) {
+        if self.margin > 0.0 {
+            let x = if end { &self.x1 } else { &self.x0 };
+            mark_far(&self.switches, &self.shapes, x, self.margin, &mut self.near);
+        }
+    }
+
+    /// Whether the far marks are those of the state `y` (the end of the last step
+    /// located, where nothing crossed).
+    pub(in crate::sim) fn marks_hold_at(&self, y: &[f64]) -> bool {
+        self.end_known && self.margin > 0.0 && self.y1 == y
+    }
+
+    /// Whether grip `j`'s end is marked too far from its shape to touch (where
+    /// [`Events::marks_hold_at`] the current state).
+    pub(in crate::sim) fn grip_far(&self, j: usize) -> bool {
+        self.near.is_far(self.grip_touch[j])
+    }
+}
