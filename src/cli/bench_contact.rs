@@ -56,7 +56,11 @@ fn per_step(seconds: f64, repeats: usize) -> Result<(), String> {
         ("+ collisions", &collide),
         ("+ both", &both),
     ] {
-        let sim = Simulation::new(Model::new(scene).map_err(|e| e.to_string())?);
+        let mut sim = Simulation::new(Model::new(scene).map_err(|e| e.to_string())?);
+        // A run checks its step's stability once; the replayed windows share that check.
+        if let Some(problem) = sim.check_stability() {
+            return Err(format!("{name}: {problem}"));
+        }
         cases.push((name, sim, f64::INFINITY, (0, 0)));
     }
     for _ in 0..repeats {

@@ -125,9 +125,10 @@ impl Simulation {
         let mut at: Option<(usize, Vector3<f64>, Vector3<f64>)> = None;
         for (j, s) in self.events.grip_switches().iter().enumerate() {
             let grip = &mut self.inputs.grip[s.slot];
-            // A free end far from the shape stays free: marked so by the events, else by a
-            // bounds test (not a distance).
-            if *grip == Grip::Free && marked && self.events.grip_far(j) {
+            // The signs at the step's end, where the events took them, say which grips
+            // keep their mode and anchor; else a free end that fails a bounds test (not a
+            // distance) stays free.
+            if marked && self.events.grip_keeps(j, *grip) {
                 continue;
             }
             let (shape, law) = &terrain.shapes[s.shape];

@@ -4,7 +4,7 @@
 use nalgebra::Vector3;
 
 use super::{Events, Point, Switch};
-use crate::contact::{Proximity, Shape};
+use crate::contact::{Grip, Proximity, Shape};
 use crate::sim::grip::GripSwitch;
 
 /// Brings the far marks of `switches` (by index) up to the bar-end positions `x`.
@@ -70,9 +70,16 @@ impl Events {
         self.end_known && self.margin > 0.0 && self.y1 == y
     }
 
-    /// Whether grip `j`'s end is marked too far from its shape to touch (where
-    /// [`Events::marks_hold_at`] the current state).
-    pub(in crate::sim) fn grip_far(&self, j: usize) -> bool {
-        self.near.is_far(self.grip_touch[j])
+    /// Whether grip `j`, now `grip`, keeps its mode and anchor at the end of the last step
+    /// located (where [`Events::marks_hold_at`] the current state): a free end that is
+    /// marked far or does not touch stays free, a held one that touches with its switch
+    /// positive stays held.
+    pub(in crate::sim) fn grip_keeps(&self, j: usize, grip: Grip) -> bool {
+        let touch = self.grip_touch[j];
+        let apart = self.near.is_far(touch) || self.positive1[touch];
+        match grip {
+            Grip::Free => apart,
+            Grip::Stick(_) | Grip::Slip(_) => !apart && self.grip1[j],
+        }
     }
 }

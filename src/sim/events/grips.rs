@@ -10,10 +10,44 @@ use nalgebra::Vector3;
 use super::super::grip::{self, Cut, GripSwitch};
 use super::super::locate::crossing;
 use super::{Events, CUT_TIE, EDGE};
+use crate::contact::Grip;
 use crate::dynamics::Inputs;
 use crate::model::Model;
 
 impl Events {
+    /// The grips' signs at the start of a step from the state with velocities `qd`: those
+    /// of the last step's end when that is this state (`at_end`) with the same grips.
+    pub(super) fn start_grips(&mut self, model: &Model, inputs: &Inputs, qd: &[f64], at_end: bool) {
+        if !super::holding(inputs) {
+            self.grip0.fill(true);
+        } else if at_end && self.grips1 == inputs.grip {
+            std::mem::swap(&mut self.grip0, &mut self.grip1);
+            std::mem::swap(&mut self.v0, &mut self.v1);
+        } else {
+            self.grip_velocities(model, inputs, qd, false);
+            let mut signs = std::mem::take(&mut self.grip0);
+            self.grip_signs(inputs, &self.x0, &self.v0, &mut signs);
+            self.grip0 = signs;
+        }
+    }
+
+    /// The velocities of the ends that a grip holds, from the reduced velocities `qd`, into
+    /// the step's end (`end`) or start: the only ones the grips' switches read.
+    pub(super) fn grip_velocities(
+        &mut self,
+        model: &Model,
+        inputs: &Inputs,
+        qd: &[f64],
+        end: bool,
+    ) {
+        let v = if end { &mut self.v1 } else { &mut self.v0 };
+        for s in &self.grips {
+            if inputs.grip[s.slot] != Grip::Free {
+                v[s.end] = model.coords.end_vector(s.end, qd, false);
+            }
+        }
+    }
+
     /// Whether the last [`Events::locate`] saw a grip's sign change; then
     /// [`Events::locate_grips`] finishes it, with the accelerations.
     pub(in crate::sim) fn grips_changed(&self) -> bool {

@@ -103,6 +103,8 @@ pub struct Events {
     terrain: Option<Terrain>,
     grip0: Vec<bool>,
     grip1: Vec<bool>,
+    /// The grips `grip1` was taken with.
+    grips1: Vec<Grip>,
     /// Whether a grip's sign changed over the last step located: its crossing waits for
     /// the accelerations at both ends ([`Events::locate_grips`]).
     grips_changed: bool,
@@ -221,6 +223,7 @@ impl Events {
             grip_touch: far::grip_touches(&switches, &grips),
             terrain: model.terrain.clone().filter(|_| !grips.is_empty()),
             grip0: vec![false; grips.len()],
+            grips1: Vec::new(),
             grip1: vec![false; grips.len()],
             grips_changed: false,
             acc0: vec![0.0; if grips.is_empty() { 0 } else { n / 2 }],
@@ -263,7 +266,8 @@ impl Events {
     /// (from the last step's end when that is this state, with the same inputs).
     pub fn start(&mut self, model: &Model, inputs: &Inputs, y: &[f64], ws: &Workspace) {
         ws.copy_in_halves(&mut self.y0, y);
-        if self.end_known && self.y1 == y && self.rest1 == inputs.rest_length {
+        let at_end = self.end_known && self.y1 == y && self.rest1 == inputs.rest_length;
+        if at_end {
             std::mem::swap(&mut self.x0, &mut self.x1);
             std::mem::swap(&mut self.positive0, &mut self.positive1);
         } else {
@@ -278,15 +282,7 @@ impl Events {
                 ws,
             );
         }
-        if holding(inputs) {
-            let half = y.len() / 2;
-            end_velocities(model, &y[half..], &mut self.v0);
-            let mut signs = std::mem::take(&mut self.grip0);
-            self.grip_signs(inputs, &self.x0, &self.v0, &mut signs);
-            self.grip0 = signs;
-        } else {
-            self.grip0.fill(true);
-        }
+        self.start_grips(model, inputs, &y[y.len() / 2..], at_end);
         self.end_known = false;
     }
 
@@ -317,13 +313,14 @@ impl Events {
         self.crossed.clear();
         self.cuts.clear();
         self.grips_changed = false;
+        self.grips1.clear();
         if holding(inputs) {
             let half = y.len() / 2;
-            end_velocities(model, &y[half..], &mut self.v1);
-            velocities = true;
+            self.grip_velocities(model, inputs, &y[half..], true);
             let mut signs = std::mem::take(&mut self.grip1);
             self.grip_signs(inputs, &self.x1, &self.v1, &mut signs);
             self.grip1 = signs;
+            self.grips1.clone_from(&inputs.grip);
             // Only a switch turning negative changes a grip's mode.
             self.grips_changed = self.grip0.iter().zip(&self.grip1).any(|(&a, &b)| a && !b);
         }
@@ -387,7 +384,7 @@ impl Events {
 }
 
 /// Whether any grip sticks or slips (a free grip's switch is always positive).
-fn holding(inputs: &Inputs) -> bool {
+pub(super) fn holding(inputs: &Inputs) -> bool {
     inputs.grip.iter().any(|g| *g != Grip::Free)
 }
 
