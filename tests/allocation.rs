@@ -12,7 +12,42 @@ fn stepping_allocates_nothing() {
     watch_this_thread();
     fixed_steps_allocate_nothing();
     every_method_advances_without_allocating();
+    contact_allocates_nothing();
     two_threads_allocate_nothing();
+}
+
+/// The icosahedron dropped across a box step (terrain with friction that sticks, and
+/// collisions): from its first impact on, through contact onsets, grips that stick and
+/// slip and located events, no step allocates.
+fn contact_allocates_nothing() {
+    use tensegrity_fmu::integrator::Method;
+    let path =
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("fmu/scenes/icosahedron-step.toml");
+    for method in [Method::Rk4, Method::Dopri5] {
+        let mut scene = tensegrity_fmu::Scene::from_file(&path).unwrap();
+        scene.solver.method = method;
+        scene.solver.step_size = 2e-4;
+        let mut sim = Simulation::new(Model::new(&scene).unwrap());
+        // Past the first impact: every buffer has met a contact.
+        sim.advance_to(0.3).unwrap();
+        let before = allocations();
+        for k in 1..=300 {
+            sim.advance_to(0.3 + k as f64 * 2e-3).unwrap();
+        }
+        let during = allocations() - before;
+        let events = sim.stats().events;
+        assert!(
+            events > 10,
+            "{}: {events} events: the contact was never located",
+            method.name()
+        );
+        assert_eq!(
+            during,
+            0,
+            "{}: {during} allocations in contact",
+            method.name()
+        );
+    }
 }
 
 /// A tower of 4,200 bars evaluates on two threads; neither allocates in a step (every

@@ -242,7 +242,6 @@ fn end_forces_have_the_contacts_resultant_and_moment() {
                 [&v[na], &v[nb]],
                 cap.radius,
                 &grips[..2 * terrain.shapes.len()],
-                |_| false,
                 |_, s, f| {
                     force += f;
                     moment += (a + (b - a) * s - p).cross(&f);

@@ -13,13 +13,15 @@ pub struct Proximity {
     /// The points at the last marking (empty: none yet).
     anchor: Vec<Vector3<f64>>,
     far: Vec<bool>,
+    /// The items not marked far, ascending.
+    near: Vec<u32>,
 }
 
 impl Proximity {
     /// Brings the marks up to the points `x`: keeps them while no point has moved half of
     /// `margin` since they were set, else marks every one of `items` anew with
     /// `far(i, grow)` (`grow` is half the margin: how far a point may move before the next
-    /// marking).
+    /// marking). Returns whether it marked anew.
     #[inline]
     pub fn update(
         &mut self,
@@ -27,7 +29,7 @@ impl Proximity {
         margin: f64,
         items: usize,
         mut far: impl FnMut(usize, f64) -> bool,
-    ) {
+    ) -> bool {
         let limit = 0.25 * margin * margin;
         let holds = self.anchor.len() == x.len()
             && self.far.len() == items
@@ -37,12 +39,24 @@ impl Proximity {
                 .zip(x)
                 .all(|(a, b)| (a - b).norm_squared() < limit);
         if holds {
-            return;
+            return false;
         }
         self.anchor.clear();
         self.anchor.extend_from_slice(x);
         self.far.clear();
         self.far.extend((0..items).map(|i| far(i, 0.5 * margin)));
+        self.near.clear();
+        // Room for every item, so that no later marking allocates.
+        self.near.reserve(items);
+        let near = self.far.iter().enumerate().filter(|(_, &f)| !f);
+        self.near.extend(near.map(|(i, _)| i as u32));
+        true
+    }
+
+    /// The items not marked far, ascending (after an [`Proximity::update`]).
+    #[inline(always)]
+    pub fn near(&self) -> &[u32] {
+        &self.near
     }
 
     /// Whether item `i` cannot touch (false before the first marking).
@@ -62,7 +76,7 @@ mod tests {
     use super::*;
 
     fn mark(p: &mut Proximity, x: &[Vector3<f64>], calls: &mut usize) {
-        p.update(x, 0.1, x.len(), |i, grow| {
+        let _ = p.update(x, 0.1, x.len(), |i, grow| {
             *calls += 1;
             x[i].z - grow > 1.0
         });

@@ -19,40 +19,49 @@ pub struct ShapeLoad {
     pub contacts: u32,
 }
 
-/// Calls `each(shape, s, f)` for every contact force of one capsule with its end nodes
-/// at `x` moving with `v`, its ends held by `grips` (the capsule's, shape by shape), but
-/// on the shapes that `far` says it cannot touch.
+/// Calls `each(s, f)` for every contact force of one capsule on shape `k`, with its end
+/// nodes at `x` moving with `v`, its ends held by `grips` (the capsule's, shape by shape).
 #[inline]
-#[allow(clippy::too_many_arguments)]
+pub fn shape_forces(
+    terrain: &Terrain,
+    k: usize,
+    (x, v): ([&Vector3<f64>; 2], [&Vector3<f64>; 2]),
+    radius: f64,
+    grips: &[Grip],
+    mut each: impl FnMut(f64, Vector3<f64>),
+) {
+    let (shape, law) = &terrain.shapes[k];
+    let sticks = terrain.sticks[k];
+    capsule_contacts(shape, x[0], x[1], radius, |c| {
+        let f = match c.end {
+            Some(i) if sticks => {
+                let touch = grip::Touch {
+                    depth: c.depth,
+                    normal: &c.normal,
+                    x: x[i],
+                    v: v[i],
+                };
+                grip::force(law, &touch, grips[2 * k + i])
+            }
+            _ => law.force(c.depth, &c.normal, &(v[0] + (v[1] - v[0]) * c.s)),
+        };
+        each(c.s, f);
+    });
+}
+
+/// Calls `each(shape, s, f)` for every contact force of one capsule on every shape (as
+/// [`shape_forces`]).
+#[inline]
 pub fn capsule_forces(
     terrain: &Terrain,
     x: [&Vector3<f64>; 2],
     v: [&Vector3<f64>; 2],
     radius: f64,
     grips: &[Grip],
-    far: impl Fn(usize) -> bool,
     mut each: impl FnMut(usize, f64, Vector3<f64>),
 ) {
-    for (k, (shape, law)) in terrain.shapes.iter().enumerate() {
-        if far(k) {
-            continue;
-        }
-        let sticks = terrain.sticks[k];
-        capsule_contacts(shape, x[0], x[1], radius, |c| {
-            let f = match c.end {
-                Some(i) if sticks => {
-                    let touch = grip::Touch {
-                        depth: c.depth,
-                        normal: &c.normal,
-                        x: x[i],
-                        v: v[i],
-                    };
-                    grip::force(law, &touch, grips[2 * k + i])
-                }
-                _ => law.force(c.depth, &c.normal, &(v[0] + (v[1] - v[0]) * c.s)),
-            };
-            each(k, c.s, f);
-        });
+    for k in 0..terrain.shapes.len() {
+        shape_forces(terrain, k, (x, v), radius, grips, |s, f| each(k, s, f));
     }
 }
 
@@ -76,7 +85,7 @@ pub trait TerrainSink {
 #[inline]
 pub fn mark_far(terrain: &Terrain, x: &[Vector3<f64>], near: &mut Proximity) {
     let n = terrain.shapes.len();
-    near.update(x, terrain.margin, terrain.capsules.len() * n, |i, grow| {
+    let _ = near.update(x, terrain.margin, terrain.capsules.len() * n, |i, grow| {
         let cap = &terrain.capsules[i / n];
         let [a, b] = cap.nodes;
         !terrain.shapes[i % n]
@@ -85,8 +94,9 @@ pub fn mark_far(terrain: &Terrain, x: &[Vector3<f64>], near: &mut Proximity) {
     });
 }
 
-/// Every capsule's contact forces, for the node positions and velocities `(x, ẋ)`, but for
-/// the pairs marked far.
+/// Every capsule's contact forces, for the node positions and velocities `(x, ẋ)`, on the
+/// shapes it is not marked far from (`near`, brought up to `x` by [`mark_far`]), capsule by
+/// capsule and shape by shape.
 #[inline]
 pub fn apply(
     terrain: &Terrain,
@@ -96,20 +106,17 @@ pub fn apply(
     sink: &mut impl TerrainSink,
 ) {
     let n = terrain.shapes.len();
-    for (c, cap) in terrain.capsules.iter().enumerate() {
-        if (0..n).all(|k| near.is_far(c * n + k)) {
-            continue;
-        }
+    for &i in near.near() {
+        let (c, k) = (i as usize / n, i as usize % n);
         let Capsule {
             nodes: [a, b],
             ends,
             radius,
             ..
-        } = *cap;
+        } = terrain.capsules[c];
         let (x, v) = ([&nodes.0[a], &nodes.0[b]], [&nodes.1[a], &nodes.1[b]]);
         let grips = capsule_grips(terrain, grips, c);
-        let far = |k: usize| near.is_far(c * n + k);
-        capsule_forces(terrain, x, v, radius, grips, far, |k, s, f| {
+        shape_forces(terrain, k, (x, v), radius, grips, |s, f| {
             if let Some(e) = ends[0] {
                 sink.add(e, f * (1.0 - s));
             }
@@ -139,7 +146,6 @@ pub fn capsule_derivatives(
             [&v[0], &v[1]],
             radius,
             grips,
-            |_| false,
             |_, s, g| {
                 f[0] += g * (1.0 - s);
                 f[1] += g * s;

@@ -121,14 +121,23 @@ impl Simulation {
         let (q, qd) = self.state.y.split_at(half);
         let coords = &self.model.coords;
         let cuts = if at_cut { self.events.cuts() } else { &[] };
-        let marked = cuts.is_empty() && self.events.marks_hold_at(&self.state.y);
+        let events = &self.events;
+        let marked = cuts.is_empty() && events.marks_hold_at(&self.state.y);
+        // Where the marks hold, a grip marked far stays free.
+        let all = 0..events.grip_switches().len();
+        let which: &mut dyn Iterator<Item = usize> = if marked {
+            &mut events.near_grips().iter().copied()
+        } else {
+            &mut all.into_iter()
+        };
         let mut at: Option<(usize, Vector3<f64>, Vector3<f64>)> = None;
-        for (j, s) in self.events.grip_switches().iter().enumerate() {
+        for j in which {
+            let s = &events.grip_switches()[j];
             let grip = &mut self.inputs.grip[s.slot];
             // The signs at the step's end, where the events took them, say which grips
             // keep their mode and anchor; else a free end that fails a bounds test (not a
             // distance) stays free.
-            if marked && self.events.grip_keeps(j, *grip) {
+            if marked && events.grip_keeps(j, *grip) {
                 continue;
             }
             let (shape, law) = &terrain.shapes[s.shape];

@@ -7,14 +7,15 @@ use super::{Events, Point, Switch};
 use crate::contact::{Grip, Proximity, Shape};
 use crate::sim::grip::GripSwitch;
 
-/// Brings the far marks of `switches` (by index) up to the bar-end positions `x`.
+/// Brings the far marks of `switches` (by index) up to the bar-end positions `x`; whether
+/// it marked anew.
 pub(super) fn mark_far(
     switches: &[Switch],
     shapes: &[Shape],
     x: &[Vector3<f64>],
     margin: f64,
     near: &mut Proximity,
-) {
+) -> bool {
     let at = |p: Point| match p {
         Point::End(e) => x[e],
         Point::Fixed(x) => x,
@@ -35,7 +36,7 @@ pub(super) fn mark_far(
             radius,
         } => !shapes[shape].may_touch(&at(a), &at(b), radius + grow),
         Switch::Cable { .. } | Switch::Ground { .. } => false,
-    });
+    })
 }
 
 /// For each grip, the index of its end's touch switch on its shape.
@@ -60,8 +61,18 @@ impl Events {
     pub(super) fn mark_far(&mut self, end: bool) {
         if self.margin > 0.0 {
             let x = if end { &self.x1 } else { &self.x0 };
-            mark_far(&self.switches, &self.shapes, x, self.margin, &mut self.near);
+            if mark_far(&self.switches, &self.shapes, x, self.margin, &mut self.near) {
+                self.near_grips.clear();
+                let near = (0..self.grips.len()).filter(|&j| !self.near.is_far(self.grip_touch[j]));
+                self.near_grips.extend(near);
+            }
         }
+    }
+
+    /// The grips whose end is not marked far from their shape (every grip that can hold
+    /// or start to), where the marks hold.
+    pub(in crate::sim) fn near_grips(&self) -> &[usize] {
+        &self.near_grips
     }
 
     /// Whether the far marks are those of the state `y` (the end of the last step

@@ -99,7 +99,8 @@ impl Events {
         }
     }
 
-    /// Each grip's sign at the ends' positions `x` and velocities `v`.
+    /// Each grip's sign at the ends' positions `x` and velocities `v` (where the far marks
+    /// hold).
     pub(super) fn grip_signs(
         &self,
         inputs: &Inputs,
@@ -110,8 +111,11 @@ impl Events {
         let Some(terrain) = &self.terrain else {
             return;
         };
-        for (p, s) in out.iter_mut().zip(&self.grips) {
-            *p = grip::value(s, terrain, &inputs.grip, &x[s.end], &v[s.end]) > 0.0;
+        // A free grip's switch is positive, and only a grip near its shape can hold.
+        out.fill(true);
+        for &j in &self.near_grips {
+            let s = &self.grips[j];
+            out[j] = grip::value(s, terrain, &inputs.grip, &x[s.end], &v[s.end]) > 0.0;
         }
     }
 

@@ -97,6 +97,8 @@ pub struct Events {
     near: Proximity,
     margin: f64,
     grip_touch: Vec<usize>,
+    /// The grips whose touch switch is not marked far.
+    near_grips: Vec<usize>,
     /// The friction grips' switches, the terrain they are on, and their signs at both ends
     /// of the step (always taken with the velocities: the grips move between steps).
     grips: Vec<GripSwitch>,
@@ -221,6 +223,7 @@ impl Events {
             near: Proximity::default(),
             margin: model.terrain.as_ref().map_or(0.0, |t| t.margin),
             grip_touch: far::grip_touches(&switches, &grips),
+            near_grips: Vec::with_capacity(grips.len()),
             terrain: model.terrain.clone().filter(|_| !grips.is_empty()),
             grip0: vec![false; grips.len()],
             grips1: Vec::new(),
