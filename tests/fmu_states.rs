@@ -12,15 +12,22 @@ use tensegrity_fmu::fmi::{guid_for, Instance, Mode};
 const H: f64 = 1e-3;
 
 /// An instance of a shipped scene, read from a resources folder of its own.
+fn scene_text(scene: &str) -> String {
+    std::fs::read_to_string(format!("fmu/scenes/{scene}.toml")).expect("scene file")
+}
+
 fn instance(scene: &str, tag: &str) -> Instance {
-    let text = std::fs::read_to_string(format!("fmu/scenes/{scene}.toml")).expect("scene file");
+    instance_of(&scene_text(scene), scene, tag)
+}
+
+fn instance_of(text: &str, scene: &str, tag: &str) -> Instance {
     let dir = std::env::temp_dir().join(format!(
         "tensegrity-fmu-states-{}-{scene}-{tag}",
         std::process::id()
     ));
     std::fs::create_dir_all(&dir).expect("resources folder");
-    std::fs::write(dir.join("scene.toml"), &text).expect("scene.toml");
-    let i = Instance::instantiate(tag, &guid_for(&text), &dir, false).expect("instantiate");
+    std::fs::write(dir.join("scene.toml"), text).expect("scene.toml");
+    let i = Instance::instantiate(tag, &guid_for(text), &dir, false).expect("instantiate");
     std::fs::remove_dir_all(&dir).expect("remove the resources folder");
     i
 }
@@ -34,7 +41,11 @@ fn vr(i: &Instance, name: &str) -> u32 {
 /// Initialized with `method` (1–4), `correction` and a stop time of 1 s, a force on node
 /// 7, then `steps` steps of [`H`].
 fn running(scene: &str, method: i32, correction: bool, steps: usize) -> Instance {
-    let mut i = instance(scene, &format!("m{method}c{}", u8::from(correction)));
+    running_of(&scene_text(scene), scene, method, correction, steps)
+}
+
+fn running_of(text: &str, scene: &str, method: i32, correction: bool, steps: usize) -> Instance {
+    let mut i = instance_of(text, scene, &format!("m{method}c{}", u8::from(correction)));
     i.setup_experiment(0.0, Some(1.0)).unwrap();
     i.enter_initialization_mode().unwrap();
     let (m, c) = (vr(&i, "solver.method"), vr(&i, "solver.correction"));
@@ -518,4 +529,29 @@ fn friction_grips_travel_with_the_state_and_forged_ones_are_refused() {
     }
     assert_eq!(i.simulation().state(), twin.simulation().state());
     assert_eq!(i.simulation().grips(), twin.simulation().grips());
+}
+
+#[test]
+fn a_grip_forged_where_friction_does_not_stick_is_refused() {
+    // The same drop with the step's friction regularised: no end grips the step.
+    let text = scene_text("icosahedron-step") + "friction_model = \"regularized\"\n";
+    let steps = (0.6 / H) as usize;
+    let mut i = running_of(&text, "icosahedron-step-regularized", 2, true, steps);
+    let b = serialized(&i);
+    let l = Layout::of(&b);
+    // Grip 3 is bar 1's first end on the second shape, the step.
+    assert_eq!(f64_at(&b, element(l.grips, 8, 8)), 0.0, "free on the step");
+    let mut forged = b.clone();
+    put_f64(&mut forged, element(l.grips, 8, 8), 1.0);
+    assert_names(
+        &refusal(&mut i, &resealed(forged)),
+        &[
+            "friction grip 3 holds where nothing grips",
+            "terrain[2] with friction_model = \"regularized\"",
+        ],
+    );
+    // The state as saved is taken.
+    let mut twin = running_of(&text, "icosahedron-step-regularized", 2, true, 0);
+    twin.set_state(&twin.deserialize_state(&b).unwrap())
+        .unwrap();
 }
