@@ -13,3 +13,5 @@ done
   -o fmu/pictures/icosahedron-dropped.gif
 "$render" render fmu/scenes/icosahedron-dropped.toml --at 0.3 --labels \
   -o fmu/pictures/icosahedron-dropped-impact.png
+"$render" render fmu/scenes/icosahedron-step.toml --at 0.6 --contacts \
+  -o fmu/pictures/icosahedron-step-contacts.png

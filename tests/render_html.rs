@@ -48,6 +48,7 @@ fn record(
         velocities: vec![],
         tensions: vec![],
         bar_forces: vec![],
+        contacts: vec![],
     };
     let n = (duration * fps).round() as usize;
     for k in 0..=n {

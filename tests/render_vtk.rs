@@ -56,6 +56,7 @@ fn record(name: &str, force: [f64; 3], times: &[f64]) -> Frames {
         velocities: vec![],
         tensions: vec![],
         bar_forces: vec![],
+        contacts: vec![],
     };
     let (nb, nc) = (frames.bars.len(), frames.cables.len());
     for &t in times {

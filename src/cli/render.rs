@@ -6,6 +6,7 @@
 use std::path::{Path, PathBuf};
 
 use clap::Args;
+use tensegrity_fmu::dynamics::contact_points::has_contacts;
 use tensegrity_fmu::render::{animation, mode, picture, view, Frames};
 use tensegrity_fmu::Scene;
 
@@ -37,6 +38,10 @@ pub struct Request {
     /// Number the nodes, bars (b1, ...) and cables (c1, ...).
     #[arg(long)]
     pub labels: bool,
+    /// Draw every contact point (terrain, collisions, [ground]) and its force as an arrow,
+    /// the largest force of the run 15 % of the structure's size (needs a simulated run).
+    #[arg(long)]
+    pub contacts: bool,
     /// Instead of simulating, animate mode K (1-based, as `modes` numbers them) about the
     /// start equilibrium: x* + A·φ·sin(2π f t) over one period (a zero-frequency mode
     /// moves linearly there and back over 2 s), bar lengths restored; a .png shows the
@@ -115,6 +120,12 @@ pub fn render(scene: Scene, r: Request) -> Result<(), String> {
     if r.csv.is_some() && r.time.is_some() {
         return Err("--time and --csv exclude each other: the CSV's rows are the run; drop --time (or --csv to simulate)".into());
     }
+    if r.contacts && r.csv.is_some() {
+        return Err("--contacts needs a simulated run: a CSV holds no contact points or forces; drop --csv to simulate the scene instead (or drop --contacts)".into());
+    }
+    if r.contacts && r.mode.is_some() {
+        return Err("--contacts and --mode exclude each other: a mode moves about the start equilibrium, where nothing is simulated to touch; drop one".into());
+    }
     let style = picture::Style::new(azimuth, elevation, r.labels);
     let (frames, k) = match (r.mode, &format) {
         (Some(number), _) => mode_loop(&scene, &r, number)?,
@@ -177,7 +188,7 @@ fn still(scene: &Scene, r: &Request) -> Result<(Frames, usize), String> {
             "--at {at} is outside the run, which spans 0 to {time} s (--time); pass --at between them or a longer --time"
         ));
     }
-    Ok((simulate(scene, &[at], r.force)?, 0))
+    Ok((simulate(scene, &[at], r)?, 0))
 }
 
 /// The run of an animation: recorded every 1/fps s from 0 to --time (and at --time), or
@@ -203,15 +214,23 @@ fn series(scene: &Scene, r: &Request) -> Result<Frames, String> {
     if time - times[times.len() - 1] > 1e-9 * interval {
         times.push(time);
     }
-    simulate(scene, &times, r.force)
+    simulate(scene, &times, r)
 }
 
-/// The scene's run recorded at `times`, refused when predicted past
-/// [`super::work::MAX_STEPS`] steps without `force`.
-fn simulate(scene: &Scene, times: &[f64], force: bool) -> Result<Frames, String> {
+/// The scene's run recorded at `times` (with its contacts on `--contacts`, refused for a
+/// scene where nothing can touch), refused when predicted past
+/// [`super::work::MAX_STEPS`] steps without `--force`.
+fn simulate(scene: &Scene, times: &[f64], r: &Request) -> Result<Frames, String> {
+    let (force, contacts) = (r.force, r.contacts);
     let stop = times.last().copied().unwrap_or(0.0);
     let interval = times.get(1).map_or(stop, |t| t - times[0]);
-    Frames::from_checked_run(scene, times, |sim| {
+    Frames::from_checked_run(scene, times, contacts, |sim| {
+        if contacts && !has_contacts(sim.model()) {
+            return Err(format!(
+                "--contacts: scene {} has no terrain, collisions or [ground], so nothing can touch; drop --contacts (or add one of them to the scene)",
+                scene.name
+            ));
+        }
         let refused = "render refused, nothing drawn";
         super::work::predict(sim, stop, interval.max(f64::MIN_POSITIVE), force, refused).map(|_| ())
     })

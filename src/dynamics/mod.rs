@@ -8,6 +8,7 @@
 
 mod bar_response;
 pub mod collisions;
+pub mod contact_points;
 pub mod effects;
 pub mod energy;
 pub mod parallel;

@@ -1,11 +1,13 @@
 //! A run as the renderers see it: the fixed topology and, per recorded time, node
-//! positions and velocities and cable tensions and bar forces.
+//! positions and velocities and cable tensions and bar forces, and the contact points and
+//! forces where they were asked for.
 
 use std::path::Path;
 
 use serde::Serialize;
 
 use super::terrain::{Mesh, TerrainShape};
+use crate::dynamics::contact_points::ContactPoint;
 use crate::model::Model;
 use crate::scene::Scene;
 use crate::sim::Simulation;
@@ -49,6 +51,26 @@ pub struct Frames {
     pub tensions: Vec<Vec<f64>>,
     /// `bar_forces[k][b]`: bar `b` at `times[k]`, N, compression positive.
     pub bar_forces: Vec<Vec<f64>>,
+    /// `contacts[k]`: every contact point and force at `times[k]`; empty (no frame at all)
+    /// unless recorded with [`Frames::record_contacts`].
+    #[serde(skip)]
+    pub contacts: Vec<Vec<ContactPoint>>,
+}
+
+/// How contact forces are drawn: an arrow from the point along the force, the largest
+/// force of the run as long as [`ContactScale::FRACTION`] of the structure's size.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ContactScale {
+    /// The largest contact force over the recorded run, N (0: nothing touched).
+    pub max_force: f64,
+    /// Arrow length per newton, m/N (0 when nothing touched).
+    pub metres_per_newton: f64,
+}
+
+impl ContactScale {
+    /// The longest arrow as a fraction of the structure's size (the largest side of the box
+    /// around every node over the run).
+    pub const FRACTION: f64 = 0.15;
 }
 
 impl Frames {
@@ -90,19 +112,22 @@ impl Frames {
             velocities: Vec::new(),
             tensions: Vec::new(),
             bar_forces: Vec::new(),
+            contacts: Vec::new(),
         }
     }
 
     /// Simulates `scene` with its own solver settings and inputs at their start values,
     /// recording at `times` (increasing, from 0).
     pub fn from_run(scene: &Scene, times: &[f64]) -> Result<Self, String> {
-        Self::from_checked_run(scene, times, |_| Ok(()))
+        Self::from_checked_run(scene, times, false, |_| Ok(()))
     }
 
-    /// [`Frames::from_run`], once `check` has accepted the simulation about to run.
+    /// [`Frames::from_run`], once `check` has accepted the simulation about to run, with
+    /// the contacts at each time when `contacts` ([`Frames::record_contacts`]).
     pub fn from_checked_run(
         scene: &Scene,
         times: &[f64],
+        contacts: bool,
         check: impl FnOnce(&mut Simulation) -> Result<(), String>,
     ) -> Result<Self, String> {
         let model = crate::analysis::load(scene).map_err(|e| e.to_string())?;
@@ -111,12 +136,22 @@ impl Frames {
             return Err(why);
         }
         check(&mut sim)?;
-        Self::record(&mut sim, times)
+        Self::record_as(&mut sim, times, contacts)
     }
 
     /// Runs `sim` on from its current time, recording at `times` (increasing, none before
     /// the simulation's time). The inputs are whatever `sim.inputs` holds.
     pub fn record(sim: &mut Simulation, times: &[f64]) -> Result<Self, String> {
+        Self::record_as(sim, times, false)
+    }
+
+    /// [`Frames::record`], with every contact point and force at each time
+    /// ([`Simulation::contact_points`]).
+    pub fn record_contacts(sim: &mut Simulation, times: &[f64]) -> Result<Self, String> {
+        Self::record_as(sim, times, true)
+    }
+
+    fn record_as(sim: &mut Simulation, times: &[f64], contacts: bool) -> Result<Self, String> {
         let mut frames = Self::topology(sim.model());
         for &t in times {
             if !(t.is_finite() && t >= sim.time()) {
@@ -131,6 +166,9 @@ impl Frames {
             }
             sim.refresh();
             frames.push_state(sim, sim.time());
+            if contacts {
+                frames.contacts.push(sim.contact_points());
+            }
         }
         Ok(frames)
     }
@@ -180,6 +218,10 @@ impl Frames {
             velocities: pick3(&self.velocities),
             tensions: pick(&self.tensions),
             bar_forces: pick(&self.bar_forces),
+            contacts: keep
+                .iter()
+                .filter_map(|&k| self.contacts.get(k).cloned())
+                .collect(),
             ..self.topology_only()
         }
     }
@@ -231,6 +273,42 @@ impl Frames {
             velocities: Vec::new(),
             tensions: Vec::new(),
             bar_forces: Vec::new(),
+            contacts: Vec::new(),
         }
+    }
+
+    /// The scale of the contact arrows, if contacts were recorded.
+    pub fn contact_scale(&self) -> Option<ContactScale> {
+        if self.contacts.is_empty() {
+            return None;
+        }
+        let max_force = self
+            .contacts
+            .iter()
+            .flatten()
+            .map(|c| c.force.norm())
+            .filter(|f| f.is_finite())
+            .fold(0.0, f64::max);
+        let (mut lo, mut hi) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
+        for p in self.positions.iter().flatten() {
+            for i in 0..3 {
+                (lo[i], hi[i]) = (lo[i].min(p[i]), hi[i].max(p[i]));
+            }
+        }
+        let size = (0..3).map(|i| hi[i] - lo[i]).fold(0.0, f64::max);
+        let size = if size > 0.0 && size.is_finite() {
+            size
+        } else {
+            1.0
+        };
+        let metres_per_newton = if max_force > 0.0 {
+            ContactScale::FRACTION * size / max_force
+        } else {
+            0.0
+        };
+        Some(ContactScale {
+            max_force,
+            metres_per_newton,
+        })
     }
 }

@@ -45,6 +45,41 @@ struct PageData<'a> {
     tensions: String,
     /// `f32`: `[k n_bars + b]`, N, compression positive.
     bar_forces: String,
+    /// The contact points and forces, where the run recorded them.
+    contacts: Option<ContactData>,
+}
+
+/// Every frame's contacts: frame k's are `counts[k]` points after those of the frames
+/// before it.
+#[derive(Serialize)]
+struct ContactData {
+    /// `u32`: contacts per frame.
+    counts: String,
+    /// `f32`: `[3 m + c]`, contact m's point, m.
+    points: String,
+    /// `f32`: as points, the force on the structure there, N.
+    forces: String,
+    /// The largest force over the run, N.
+    max_force: f64,
+    /// Arrow length per newton, m/N.
+    metres_per_newton: f64,
+}
+
+fn contact_data(frames: &Frames) -> Option<ContactData> {
+    let scale = frames.contact_scale()?;
+    let all = frames.contacts.iter().flatten();
+    let counts: Vec<u8> = frames
+        .contacts
+        .iter()
+        .flat_map(|c| u32::try_from(c.len()).unwrap_or(u32::MAX).to_le_bytes())
+        .collect();
+    Some(ContactData {
+        counts: BASE64.encode(counts),
+        points: f32_base64(all.clone().flat_map(|c| c.point.as_slice())),
+        forces: f32_base64(all.flat_map(|c| c.force.as_slice())),
+        max_force: scale.max_force,
+        metres_per_newton: scale.metres_per_newton,
+    })
 }
 
 /// Base64 of `values` as little-endian `f32`.
@@ -82,6 +117,7 @@ pub fn embedded_json(frames: &Frames) -> String {
         velocities: f32_base64(frames.velocities.iter().flatten().flatten()),
         tensions: f32_base64(frames.tensions.iter().flatten()),
         bar_forces: f32_base64(frames.bar_forces.iter().flatten()),
+        contacts: contact_data(frames),
     };
     let json = serde_json::to_string(&data).expect("plain data serializes");
     json.replace('<', "\\u003c")
@@ -177,6 +213,7 @@ mod tests {
             velocities: vec![vec![[0.0; 3]; 3]; 2],
             tensions: vec![vec![3.0, 0.0], vec![f64::NAN, 2.5]],
             bar_forces: vec![vec![1.0], vec![-1.5]],
+            contacts: Vec::new(),
         }
     }
 

@@ -15,4 +15,4 @@ pub mod terrain;
 pub mod view;
 pub mod vtk;
 
-pub use frames::{Frames, GroundPlane};
+pub use frames::{ContactScale, Frames, GroundPlane};

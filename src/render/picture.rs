@@ -1,8 +1,11 @@
 //! Still pictures (PNG) of a recorded run, drawn with plotters: an orthographic view fitted
 //! to the structure over the whole run, bars as thick dark lines, cables over them coloured
 //! by tension (slack ones light grey and dashed) with a colour bar, pinned nodes as
-//! triangles, point masses as filled circles, the ground plane as a grid, and a title.
-//! [`draw_frame`] is shared with the GIF animation and the FMU icon.
+//! triangles, point masses as filled circles, the ground plane as a grid, and a title;
+//! the contacts, where the run recorded them ([`contacts`]). [`draw_frame`] is shared with
+//! the GIF animation and the FMU icon.
+
+pub mod contacts;
 
 use std::path::Path;
 
@@ -219,6 +222,7 @@ pub fn draw_frame<DB: DrawingBackend>(
         area.draw(&Circle::new(px(pos[i]), r, WHITE.mix(a).stroke_width(1)))
             .map_err(&err)?;
     }
+    contacts::draw_contacts(area, frames, k, fit, style, (r / 2, thin + 1))?;
     if style.labels {
         draw_labels(area, frames, k, fit, style)?;
     }
@@ -232,6 +236,10 @@ pub fn draw_frame<DB: DrawingBackend>(
     }
     if style.colour_bar {
         draw_colour_bar(area, max_tension, thin, w as i32)?;
+        if let Some(scale) = frames.contact_scale() {
+            let y = TITLE_H + 360 + 70;
+            contacts::draw_legend(area, &scale, fit, (w as i32, y), thin)?;
+        }
     }
     Ok(())
 }

@@ -27,6 +27,16 @@
   D.velocities = perFrame(D.velocities, 3 * D.n_nodes);
   D.tensions = perFrame(D.tensions, D.cables.length);
   D.bar_forces = perFrame(D.bar_forces, D.bars.length);
+  // Contacts (when recorded): frame k's points and forces, each a flat [x, y, z, …].
+  var CONTACTS = null;
+  if (D.contacts) {
+    CONTACTS = { frames: [], maxForce: D.contacts.max_force, perNewton: D.contacts.metres_per_newton };
+    var counts = new Uint32Array(decode(D.contacts.counts));
+    var cp = new Float32Array(decode(D.contacts.points)), cf = new Float32Array(decode(D.contacts.forces));
+    for (var ck = 0, at = 0; ck < counts.length; at += 3 * counts[ck], ck++) {
+      CONTACTS.frames.push({ points: cp.subarray(at, at + 3 * counts[ck]), forces: cf.subarray(at, at + 3 * counts[ck]) });
+    }
+  }
   var N = D.n_nodes, NB = D.bars.length, NC = D.cables.length, NF = D.times.length;
 
   var STYLE = {
@@ -41,7 +51,8 @@
     groundLine: "rgba(90, 104, 80, 0.35)",
     // Terrain base colours before shading (as in the PNG pictures).
     terrain: { plane: [226, 222, 205], box: [200, 162, 118], heightfield: [142, 180, 122] },
-    highlight: "#e8590c"
+    highlight: "#e8590c",
+    contact: "#c814a0"          // rgb(200, 20, 160), as in the PNG pictures
   };
   // Cable colour ramp: tension 0 → max (blue, cyan, green, orange, red).
   var RAMP = [
@@ -476,7 +487,48 @@
       ctx.strokeStyle = "#ffffff";
       ctx.stroke();
     });
+    drawContacts();
     drawAxes();
+  }
+
+  // Contact points as dots, their forces as arrows (the run's largest 15 % of its size).
+  function drawContacts() {
+    var c = CONTACTS && CONTACTS.frames[frame];
+    if (!c) return;
+    ctx.setLineDash([]);
+    ctx.strokeStyle = ctx.fillStyle = STYLE.contact;
+    for (var m = 0; m < c.points.length; m += 3) {
+      var p = [c.points[m], c.points[m + 1], c.points[m + 2]];
+      var f = [c.forces[m], c.forces[m + 1], c.forces[m + 2]];
+      var seg = clipSeg(toCam(p), toCam(add(p, mul(f, CONTACTS.perNewton))));
+      if (!seg) continue;
+      arrow(ctx, seg[0][0], seg[0][1], seg[1][0], seg[1][1], 2.5);
+    }
+    for (m = 0; m < c.points.length; m += 3) {
+      var q = project3([c.points[m], c.points[m + 1], c.points[m + 2]]);
+      if (!q) continue;
+      ctx.beginPath();
+      ctx.arc(q[0], q[1], 4, 0, 2 * Math.PI);
+      ctx.fillStyle = STYLE.contact;
+      ctx.fill();
+      ctx.lineWidth = 1.2;
+      ctx.strokeStyle = "#ffffff";
+      ctx.stroke();
+    }
+  }
+
+  // A line from (x0, y0) to (x1, y1) with a head there, in the current colour.
+  function arrow(g, x0, y0, x1, y1, width) {
+    var dx = x1 - x0, dy = y1 - y0, len = Math.hypot(dx, dy);
+    if (len < 2) return;
+    var ux = dx / len, uy = dy / len, head = Math.min(0.35 * len, 6 + 2 * width);
+    g.lineWidth = width;
+    g.beginPath(); g.moveTo(x0, y0); g.lineTo(x1 - ux * head * 0.5, y1 - uy * head * 0.5); g.stroke();
+    g.beginPath();
+    g.moveTo(x1, y1);
+    g.lineTo(x1 - head * (ux * 0.94 - uy * 0.34), y1 - head * (uy * 0.94 + ux * 0.34));
+    g.lineTo(x1 - head * (ux * 0.94 + uy * 0.34), y1 - head * (uy * 0.94 - ux * 0.34));
+    g.closePath(); g.fill();
   }
 
   // Pixels of a typical member seen at the view's distance.
@@ -761,6 +813,17 @@
       g.fillStyle = STYLE.ground; g.fillRect(2, 3, 32, 10);
       g.strokeStyle = STYLE.groundLine; g.strokeRect(2.5, 3.5, 31, 9);
     });
+    if (CONTACTS) {
+      var most = CONTACTS.maxForce;
+      var what = most > 0
+        ? "contact, arrow: " + fmt(most, 1) + " N per " + fmt(most * CONTACTS.perNewton, 3) + " m"
+        : "contact: none in this run";
+      row(what, function (g) {
+        g.strokeStyle = g.fillStyle = STYLE.contact;
+        if (most > 0) arrow(g, 6, 8, 34, 8, 2);
+        g.beginPath(); g.arc(6, 8, 4, 0, 2 * Math.PI); g.fill();
+      });
+    }
   }
   document.getElementById("summary").textContent =
     [[N, "node"], [NB, "bar"], [NC, "cable"], [NF, "frame"]]
@@ -773,6 +836,16 @@
     data: D,
     style: STYLE,
     maxTension: maxTension,
+    // The contacts drawn at frame k: [{point: [x, y, z], force: [fx, fy, fz]}], or null.
+    contacts: function (k) {
+      var c = CONTACTS && CONTACTS.frames[k];
+      if (!c) return null;
+      var out = [];
+      for (var m = 0; m < c.points.length; m += 3) {
+        out.push({ point: Array.from(c.points.subarray(m, m + 3)), force: Array.from(c.forces.subarray(m, m + 3)) });
+      }
+      return out;
+    },
     frame: function () { return frame; },
     frameCount: NF,
     setFrame: setFrame,

@@ -20,6 +20,10 @@
 //! structure's extent over the run), with cell data `shape` (Int32, the 1-based terrain
 //! number) and `kind` (Int32: 0 plane, 1 box, 2 heightfield).
 //!
+//! A run recorded with its contacts adds `NAME_vtp/NAME_contacts_0000.vtp`, … per time,
+//! the last part of each time: the contact points as vertices with their `force` (see
+//! [`contacts`]).
+//!
 //! The XML is written with quick-xml's `Writer`; the arrays in VTK's inline `binary`
 //! format (`header_type="UInt64"`: base64 of the byte count followed by the little-endian
 //! values, no compression), so every double reads back bit for bit. Times in the `.pvd` are written as the shortest decimal that reads back
@@ -43,6 +47,8 @@ use quick_xml::Writer;
 
 use super::terrain::TerrainShape;
 use super::Frames;
+
+mod contacts;
 
 /// Writes `frames` as the ParaView time series `path` (which must end in `.pvd`) plus the
 /// folder `NAME_vtp/` beside it (see the module documentation for what each file holds).
@@ -185,11 +191,20 @@ fn write_all(
     for (k, name) in names.iter().enumerate() {
         create(name, &|out| write_vtp(frames, k, out))?;
     }
-    let terrain = (!frames.terrain.is_empty()).then(|| format!("{stem}_terrain.vtp"));
-    if let Some(name) = &terrain {
-        create(name, &|out| write_terrain(frames, out))?;
+    let mut parts: Vec<Vec<String>> = names.into_iter().map(|n| vec![n]).collect();
+    if !frames.terrain.is_empty() {
+        let name = format!("{stem}_terrain.vtp");
+        create(&name, &|out| write_terrain(frames, out))?;
+        parts.iter_mut().for_each(|p| p.push(name.clone()));
     }
-    write_collection(frames, folder_name, &names, terrain.as_deref(), pvd)
+    if !frames.contacts.is_empty() {
+        for (k, p) in parts.iter_mut().enumerate() {
+            let name = format!("{stem}_contacts_{k:0digits$}.vtp");
+            create(&name, &|out| contacts::write_contacts(frames, k, out))?;
+            p.push(name);
+        }
+    }
+    write_collection(frames, folder_name, &parts, pvd)
 }
 
 /// A number type of a VTK `DataArray`: its `type` name and its little-endian bytes.
@@ -392,35 +407,27 @@ fn write_terrain(frames: &Frames, file: File) -> Result<(), String> {
     })
 }
 
-/// The VTK Collection listing one `DataSet` per time, files relative to the `.pvd`, and
-/// the terrain as part 1 of every time.
+/// The VTK Collection listing one `DataSet` per time and part, files relative to the
+/// `.pvd`: `parts[k]` are time k's files, part 0 the run's, then the terrain's and the
+/// contacts' where there are.
 fn write_collection(
     frames: &Frames,
     folder_name: &str,
-    names: &[String],
-    terrain: Option<&str>,
+    parts: &[Vec<String>],
     file: File,
 ) -> Result<(), String> {
     write_vtk_file(file, "Collection", "0.1", None, |xml| {
         xml.create_element("Collection")
             .write_inner_content(|xml| {
-                for (t, name) in frames.times.iter().zip(names) {
-                    let (time, path) = (t.to_string(), format!("{folder_name}/{name}"));
-                    xml.create_element("DataSet")
-                        .with_attributes([
-                            ("timestep", time.as_str()),
-                            ("group", ""),
-                            ("part", "0"),
-                            ("file", path.as_str()),
-                        ])
-                        .write_empty()?;
-                    if let Some(terrain) = terrain {
-                        let path = format!("{folder_name}/{terrain}");
+                for (t, files) in frames.times.iter().zip(parts) {
+                    let time = t.to_string();
+                    for (part, name) in files.iter().enumerate() {
+                        let (part, path) = (part.to_string(), format!("{folder_name}/{name}"));
                         xml.create_element("DataSet")
                             .with_attributes([
                                 ("timestep", time.as_str()),
                                 ("group", ""),
-                                ("part", "1"),
+                                ("part", part.as_str()),
                                 ("file", path.as_str()),
                             ])
                             .write_empty()?;

@@ -423,6 +423,15 @@ impl Simulation {
         self.ws.contact_force.iter().sum()
     }
 
+    /// Every contact point and its force in the current state (terrain, collisions and
+    /// the ground, with the current grips); see [`dynamics::contact_points`].
+    pub fn contact_points(&self) -> Vec<dynamics::contact_points::ContactPoint> {
+        let n = self.model.n_nodes();
+        let x: Vec<Vector3<f64>> = (0..n).map(|i| self.node_position(i)).collect();
+        let v: Vec<Vector3<f64>> = (0..n).map(|i| self.node_velocity(i)).collect();
+        dynamics::contact_points::contact_points(&self.model, &self.inputs.grip, &x, &v)
+    }
+
     /// Kinetic + cable strain + gravity + ground penalty energy, J.
     pub fn energy(&self) -> f64 {
         energy::kinetic(&self.model, &self.ws)
