@@ -67,26 +67,18 @@ pub fn contact_points(
             let [a, b] = cap.nodes;
             let grips = capsule_grips(terrain, grips, c);
             let (xs, vs) = ([&x[a], &x[b]], [&v[a], &v[b]]);
-            capsule_forces(
-                terrain,
-                xs,
-                vs,
-                cap.radius,
-                grips,
-                |_| false,
-                |k, s, f| {
-                    let axis = x[a] + (x[b] - x[a]) * s;
-                    let normal = terrain.shapes[k].0.distance(&axis).map(|(_, n)| n);
-                    out.push(ContactPoint {
-                        point: axis - normal.unwrap_or_else(Vector3::zeros) * cap.radius,
-                        force: f,
-                        kind: ContactKind::Terrain {
-                            bar: cap.bar,
-                            shape: k,
-                        },
-                    });
-                },
-            );
+            capsule_forces(terrain, xs, vs, cap.radius, grips, |k, s, f| {
+                let axis = x[a] + (x[b] - x[a]) * s;
+                let normal = terrain.shapes[k].0.distance(&axis).map(|(_, n)| n);
+                out.push(ContactPoint {
+                    point: axis - normal.unwrap_or_else(Vector3::zeros) * cap.radius,
+                    force: f,
+                    kind: ContactKind::Terrain {
+                        bar: cap.bar,
+                        shape: k,
+                    },
+                });
+            });
         }
     }
     if let Some(collisions) = &model.collisions {
