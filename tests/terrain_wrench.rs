@@ -285,3 +285,24 @@ fn end_forces_have_the_contacts_resultant_and_moment() {
     assert!(far >= 500, "{far} capsule–shape pairs skipped as far");
     assert!(interior >= 200, "{interior} interior contacts");
 }
+
+#[test]
+fn a_steep_heightfield_touches_a_capsule_above_its_top_where_its_depth_says() {
+    // Heights 0 and 1 m, 0.1 m apart: a slope of 10, n_z = 1/√101. Ends over the slope
+    // at x = 0.095 (h = 0.95) and 5 cm above the top: the vertical gap 0.1 m times n_z is
+    // 9.95 mm, inside the 2 cm radius.
+    let grid = Grid::new([0.0, 0.0], [0.1, 0.1], &[vec![0.0, 1.0], vec![0.0, 1.0]]);
+    let shape = Shape::Heightfield(grid);
+    let (a, b) = (
+        Vector3::new(0.095, 0.02, 1.05),
+        Vector3::new(0.095, 0.08, 1.05),
+    );
+    let mut depths = Vec::new();
+    tensegrity_fmu::contact::capsule_contacts(&shape, &a, &b, 0.02, |c| depths.push(c.depth));
+    let expected = 0.02 - (1.05 - 0.95) / 101f64.sqrt();
+    println!("depths {depths:?}, expected {expected}");
+    assert_eq!(depths.len(), 2, "both ends touch: {depths:?}");
+    for d in depths {
+        assert!((d - expected).abs() < 1e-12, "depth {d} against {expected}");
+    }
+}

@@ -42,6 +42,9 @@ pub struct Grid {
     pub heights: Vec<f64>,
     /// The highest height, m.
     pub top: f64,
+    /// The smallest z component of the normal anywhere (from the steepest slopes): a
+    /// sphere of radius r can touch only below `top + r / min_nz`.
+    pub min_nz: f64,
 }
 
 impl Grid {
@@ -49,6 +52,16 @@ impl Grid {
     pub fn new(origin: [f64; 2], spacing: [f64; 2], rows: &[Vec<f64>]) -> Self {
         let heights: Vec<f64> = rows.iter().flatten().copied().collect();
         let top = heights.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+        // Within a cell each slope is a mix of its edges' differences, so the steepest
+        // edges bound the gradient everywhere (and beyond the border it is flatter).
+        let steepest = |d: &mut dyn Iterator<Item = f64>| d.fold(0.0, |m: f64, x| m.max(x.abs()));
+        let sx = steepest(&mut rows.iter().flat_map(|r| r.windows(2).map(|w| w[1] - w[0])));
+        let sy = steepest(
+            &mut rows
+                .windows(2)
+                .flat_map(|w| w[0].iter().zip(&w[1]).map(|(a, b)| b - a)),
+        );
+        let (gx, gy) = (sx / spacing[0], sy / spacing[1]);
         Self {
             origin,
             spacing,
@@ -56,6 +69,7 @@ impl Grid {
             ny: rows.len(),
             heights,
             top,
+            min_nz: 1.0 / (1.0 + gx * gx + gy * gy).sqrt(),
         }
     }
 
@@ -158,7 +172,8 @@ impl Shape {
                 let (pa, pb) = (axes.tr_mul(&(a - center)), axes.tr_mul(&(b - center)));
                 (0..3).all(|k| pa[k].min(pb[k]) - r < half[k] && pa[k].max(pb[k]) + r > -half[k])
             }
-            Self::Heightfield(grid) => a.z.min(b.z) - r < grid.top,
+            // The depth is the vertical gap times n_z: a steep slope reaches up to r / n_z.
+            Self::Heightfield(grid) => a.z.min(b.z) - r / grid.min_nz < grid.top,
         }
     }
 

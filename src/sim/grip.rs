@@ -123,21 +123,13 @@ impl Simulation {
         let cuts = if at_cut { self.events.cuts() } else { &[] };
         let events = &self.events;
         let marked = cuts.is_empty() && events.marks_hold_at(&self.state.y);
-        // Where the marks hold, a grip marked far stays free.
-        let all = 0..events.grip_switches().len();
-        let which: &mut dyn Iterator<Item = usize> = if marked {
-            &mut events.near_grips().iter().copied()
-        } else {
-            &mut all.into_iter()
-        };
         let mut at: Option<(usize, Vector3<f64>, Vector3<f64>)> = None;
-        for j in which {
-            let s = &events.grip_switches()[j];
+        for (j, s) in events.grip_switches().iter().enumerate() {
             let grip = &mut self.inputs.grip[s.slot];
-            // The signs at the step's end, where the events took them, say which grips
-            // keep their mode and anchor; else a free end that fails a bounds test (not a
-            // distance) stays free.
-            if marked && events.grip_keeps(j, *grip) {
+            // A free end stays free where the signs at the step's end, which the events
+            // took, say it is far or apart; else where it fails a bounds test (not a
+            // distance). A held grip is always moved on (they are few).
+            if *grip == Grip::Free && marked && events.stays_free(j) {
                 continue;
             }
             let (shape, law) = &terrain.shapes[s.shape];

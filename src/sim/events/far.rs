@@ -4,7 +4,7 @@
 use nalgebra::Vector3;
 
 use super::{Events, Point, Switch};
-use crate::contact::{Grip, Proximity, Shape};
+use crate::contact::{Proximity, Shape};
 use crate::sim::grip::GripSwitch;
 
 /// Brings the far marks of `switches` (by index) up to the bar-end positions `x`; whether
@@ -69,28 +69,17 @@ impl Events {
         }
     }
 
-    /// The grips whose end is not marked far from their shape (every grip that can hold
-    /// or start to), where the marks hold.
-    pub(in crate::sim) fn near_grips(&self) -> &[usize] {
-        &self.near_grips
-    }
-
     /// Whether the far marks are those of the state `y` (the end of the last step
     /// located, where nothing crossed).
     pub(in crate::sim) fn marks_hold_at(&self, y: &[f64]) -> bool {
         self.end_known && self.margin > 0.0 && self.y1 == y
     }
 
-    /// Whether grip `j`, now `grip`, keeps its mode and anchor at the end of the last step
-    /// located (where [`Events::marks_hold_at`] the current state): a free end that is
-    /// marked far or does not touch stays free, a held one that touches with its switch
-    /// positive stays held.
-    pub(in crate::sim) fn grip_keeps(&self, j: usize, grip: Grip) -> bool {
+    /// Whether free grip `j` stays free at the end of the last step located (where
+    /// [`Events::marks_hold_at`] the current state): its end is marked far from its shape,
+    /// or its touch switch is positive there (`φ − r > 0`: not touching).
+    pub(in crate::sim) fn stays_free(&self, j: usize) -> bool {
         let touch = self.grip_touch[j];
-        let apart = self.near.is_far(touch) || self.positive1[touch];
-        match grip {
-            Grip::Free => apart,
-            Grip::Stick(_) | Grip::Slip(_) => !apart && self.grip1[j],
-        }
+        self.near.is_far(touch) || self.positive1[touch]
     }
 }
