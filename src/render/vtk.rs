@@ -290,6 +290,58 @@ fn write_vtk_file(
         .map_err(|e| e.to_string())
 }
 
+/// The XML writer of a VTK file.
+type VtkWriter = Writer<BufWriter<File>>;
+
+/// Point or cell data: the element's attributes and what writes its arrays.
+type Section<'a> = Option<(
+    &'a [(&'a str, &'a str)],
+    &'a dyn Fn(&mut VtkWriter) -> std::io::Result<()>,
+)>;
+
+/// A `.vtp` of one PolyData piece: `points` (3 values each), cells of one kind (`Verts`,
+/// `Lines` or `Polys`, with their connectivity and offsets), and the point and cell data.
+fn write_poly_data(
+    file: File,
+    points: &[f64],
+    (cells, connectivity, offsets): (&str, &[u64], &[u64]),
+    point_data: Section,
+    cell_data: Section,
+) -> Result<(), String> {
+    let (n_points, n_cells) = ((points.len() / 3).to_string(), offsets.len().to_string());
+    let count = |kind: &str| if kind == cells { n_cells.as_str() } else { "0" };
+    write_vtk_file(file, "PolyData", "1.0", Some("UInt64"), |xml| {
+        xml.create_element("PolyData").write_inner_content(|xml| {
+            xml.create_element("Piece")
+                .with_attributes([
+                    ("NumberOfPoints", n_points.as_str()),
+                    ("NumberOfVerts", count("Verts")),
+                    ("NumberOfLines", count("Lines")),
+                    ("NumberOfStrips", "0"),
+                    ("NumberOfPolys", count("Polys")),
+                ])
+                .write_inner_content(|xml| {
+                    for (tag, section) in [("PointData", point_data), ("CellData", cell_data)] {
+                        if let Some((attributes, arrays)) = section {
+                            xml.create_element(tag)
+                                .with_attributes(attributes.iter().copied())
+                                .write_inner_content(|xml| arrays(xml))?;
+                        }
+                    }
+                    xml.create_element("Points")
+                        .write_inner_content(|xml| data_array(xml, None, 3, points))?;
+                    xml.create_element(cells).write_inner_content(|xml| {
+                        data_array(xml, Some("connectivity"), 1, connectivity)?;
+                        data_array(xml, Some("offsets"), 1, offsets)
+                    })?;
+                    Ok(())
+                })?;
+            Ok(())
+        })?;
+        Ok(())
+    })
+}
+
 /// The `.vtp` of time `k`.
 fn write_vtp(frames: &Frames, k: usize, file: File) -> Result<(), String> {
     let n = frames.n_nodes();
@@ -311,45 +363,24 @@ fn write_vtp(frames: &Frames, k: usize, file: File) -> Result<(), String> {
     for &p in &frames.pinned {
         pinned[p] = 1;
     }
-    let (n_points, n_lines) = (n.to_string(), (nb + nc).to_string());
-    write_vtk_file(file, "PolyData", "1.0", Some("UInt64"), |xml| {
-        xml.create_element("PolyData").write_inner_content(|xml| {
-            xml.create_element("Piece")
-                .with_attributes([
-                    ("NumberOfPoints", n_points.as_str()),
-                    ("NumberOfVerts", "0"),
-                    ("NumberOfLines", n_lines.as_str()),
-                    ("NumberOfStrips", "0"),
-                    ("NumberOfPolys", "0"),
-                ])
-                .write_inner_content(|xml| {
-                    xml.create_element("PointData")
-                        .with_attributes([("Scalars", "node"), ("Vectors", "velocity")])
-                        .write_inner_content(|xml| {
-                            data_array(xml, Some("velocity"), 3, &velocity)?;
-                            data_array(xml, Some("node"), 1, &node)?;
-                            data_array(xml, Some("pinned"), 1, &pinned)
-                        })?;
-                    // `tension` is the active scalars: ParaView colours by it.
-                    xml.create_element("CellData")
-                        .with_attribute(("Scalars", "tension"))
-                        .write_inner_content(|xml| {
-                            data_array(xml, Some("tension"), 1, &tension)?;
-                            data_array(xml, Some("kind"), 1, &kind)?;
-                            data_array(xml, Some("number"), 1, &number)
-                        })?;
-                    xml.create_element("Points")
-                        .write_inner_content(|xml| data_array(xml, None, 3, &points))?;
-                    xml.create_element("Lines").write_inner_content(|xml| {
-                        data_array(xml, Some("connectivity"), 1, &connectivity)?;
-                        data_array(xml, Some("offsets"), 1, &offsets)
-                    })?;
-                    Ok(())
-                })?;
-            Ok(())
-        })?;
-        Ok(())
-    })
+    let point_data = |xml: &mut VtkWriter| {
+        data_array(xml, Some("velocity"), 3, &velocity)?;
+        data_array(xml, Some("node"), 1, &node)?;
+        data_array(xml, Some("pinned"), 1, &pinned)
+    };
+    let cell_data = |xml: &mut VtkWriter| {
+        data_array(xml, Some("tension"), 1, &tension)?;
+        data_array(xml, Some("kind"), 1, &kind)?;
+        data_array(xml, Some("number"), 1, &number)
+    };
+    write_poly_data(
+        file,
+        &points,
+        ("Lines", &connectivity, &offsets),
+        Some((&[("Scalars", "node"), ("Vectors", "velocity")], &point_data)),
+        // `tension` is the active scalars: ParaView colours by it.
+        Some((&[("Scalars", "tension")], &cell_data)),
+    )
 }
 
 /// The terrain's `.vtp`: every shape's quads as polygons.
@@ -375,36 +406,17 @@ fn write_terrain(frames: &Frames, file: File) -> Result<(), String> {
             });
         }
     }
-    let (n_points, n_polys) = ((points.len() / 3).to_string(), offsets.len().to_string());
-    write_vtk_file(file, "PolyData", "1.0", Some("UInt64"), |xml| {
-        xml.create_element("PolyData").write_inner_content(|xml| {
-            xml.create_element("Piece")
-                .with_attributes([
-                    ("NumberOfPoints", n_points.as_str()),
-                    ("NumberOfVerts", "0"),
-                    ("NumberOfLines", "0"),
-                    ("NumberOfStrips", "0"),
-                    ("NumberOfPolys", n_polys.as_str()),
-                ])
-                .write_inner_content(|xml| {
-                    xml.create_element("CellData")
-                        .with_attribute(("Scalars", "kind"))
-                        .write_inner_content(|xml| {
-                            data_array(xml, Some("kind"), 1, &kind)?;
-                            data_array(xml, Some("shape"), 1, &shape)
-                        })?;
-                    xml.create_element("Points")
-                        .write_inner_content(|xml| data_array(xml, None, 3, &points))?;
-                    xml.create_element("Polys").write_inner_content(|xml| {
-                        data_array(xml, Some("connectivity"), 1, &connectivity)?;
-                        data_array(xml, Some("offsets"), 1, &offsets)
-                    })?;
-                    Ok(())
-                })?;
-            Ok(())
-        })?;
-        Ok(())
-    })
+    let cell_data = |xml: &mut VtkWriter| {
+        data_array(xml, Some("kind"), 1, &kind)?;
+        data_array(xml, Some("shape"), 1, &shape)
+    };
+    write_poly_data(
+        file,
+        &points,
+        ("Polys", &connectivity, &offsets),
+        None,
+        Some((&[("Scalars", "kind")], &cell_data)),
+    )
 }
 
 /// The VTK Collection listing one `DataSet` per time and part, files relative to the

@@ -8,7 +8,7 @@
 use std::fs::File;
 
 use super::super::Frames;
-use super::{data_array, write_vtk_file};
+use super::{data_array, write_poly_data, VtkWriter};
 use crate::dynamics::contact_points::ContactKind;
 
 /// The contacts' `.vtp` of time `k`.
@@ -37,37 +37,21 @@ pub(super) fn write_contacts(frames: &Frames, k: usize, file: File) -> Result<()
     }
     let connectivity: Vec<u64> = (0..n as u64).collect();
     let offsets: Vec<u64> = (1..=n as u64).collect();
-    let n = n.to_string();
-    write_vtk_file(file, "PolyData", "1.0", Some("UInt64"), |xml| {
-        xml.create_element("PolyData").write_inner_content(|xml| {
-            xml.create_element("Piece")
-                .with_attributes([
-                    ("NumberOfPoints", n.as_str()),
-                    ("NumberOfVerts", n.as_str()),
-                    ("NumberOfLines", "0"),
-                    ("NumberOfStrips", "0"),
-                    ("NumberOfPolys", "0"),
-                ])
-                .write_inner_content(|xml| {
-                    xml.create_element("PointData")
-                        .with_attributes([("Scalars", "magnitude"), ("Vectors", "force")])
-                        .write_inner_content(|xml| {
-                            data_array(xml, Some("force"), 3, &force)?;
-                            data_array(xml, Some("magnitude"), 1, &magnitude)?;
-                            data_array(xml, Some("kind"), 1, &kind)?;
-                            data_array(xml, Some("bar"), 1, &bar)?;
-                            data_array(xml, Some("with"), 1, &with)
-                        })?;
-                    xml.create_element("Points")
-                        .write_inner_content(|xml| data_array(xml, None, 3, &points))?;
-                    xml.create_element("Verts").write_inner_content(|xml| {
-                        data_array(xml, Some("connectivity"), 1, &connectivity)?;
-                        data_array(xml, Some("offsets"), 1, &offsets)
-                    })?;
-                    Ok(())
-                })?;
-            Ok(())
-        })?;
-        Ok(())
-    })
+    let point_data = |xml: &mut VtkWriter| {
+        data_array(xml, Some("force"), 3, &force)?;
+        data_array(xml, Some("magnitude"), 1, &magnitude)?;
+        data_array(xml, Some("kind"), 1, &kind)?;
+        data_array(xml, Some("bar"), 1, &bar)?;
+        data_array(xml, Some("with"), 1, &with)
+    };
+    write_poly_data(
+        file,
+        &points,
+        ("Verts", &connectivity, &offsets),
+        Some((
+            &[("Scalars", "magnitude"), ("Vectors", "force")],
+            &point_data,
+        )),
+        None,
+    )
 }
