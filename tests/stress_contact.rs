@@ -15,7 +15,8 @@ use terrain_support::{prism_scene, G};
 
 /// Check: the icosahedron with 2 cm capsules dropped across the edge of a 15 cm box step
 /// onto the ground (fmu/scenes/icosahedron-step.toml), 2 s, with rk4 at 0.1 ms (inside
-/// the limit the collisions' friction sets), dopri5 at 1e-8 and sdirk3 at 1 ms: no step
+/// the limit the collisions' friction sets), dopri5 at 1e-8 and sdirk3 at 0.5 ms (at 1 ms
+/// its Newton iteration fails where an end lands on the ground at 1.9 m/s): no step
 /// error, finite, exact constraints; no capsule sinks through the ground (the lowest node
 /// stays above the radius less 3 W / k, three times the whole weight on one contact); it
 /// lands on the step (a box contact); its energy at 2 s is below the start's (damped
@@ -33,7 +34,7 @@ fn six_bar_dropped_onto_a_box_step() {
     for (method, h, tol) in [
         (Method::Rk4, 1e-4, 1e-6),
         (Method::Dopri5, 1e-3, 1e-8),
-        (Method::Sdirk3, 1e-3, 1e-6),
+        (Method::Sdirk3, 5e-4, 1e-6),
     ] {
         let mut sim = build(&with_solver(scene.clone(), method, h, tol));
         sim.refresh();

@@ -210,6 +210,7 @@ fn end_forces_have_the_contacts_resultant_and_moment() {
             capsules,
             sticks,
             margin: 0.2,
+            trail: 0.2 / 500.0,
         };
         let grips = vec![Grip::Free; terrain.grips()];
         let mut sink = Ends {

@@ -6,33 +6,32 @@
 //!   part), up to `μ N`. At rest under a load below `μ N` the spring holds it exactly: no
 //!   creep.
 //! - **Slip**: kinetic friction `f_t = −μ N ê`, with `ê` the tangential direction from the
-//!   anchor to the point. The anchor is set far behind the point ([`TRAIL`]) and stays
-//!   put while the point slides straight away from it; once the sliding direction turns
-//!   more than 10° from `ê`, it moves behind the point again, onto its velocity.
+//!   anchor to the point. The anchor trails the point by a short length `L` (the
+//!   terrain's `trail`) and stays put while the point slides. Once the point is `2 L` from
+//!   it and its path has turned more than 0.3° from `ê`, the anchor is dragged up to `L`
+//!   behind the point along `ê`. So `ê` turns toward the sliding direction within a few `L`
+//!   of sliding (the lag halves every `L`), as the stretch of a Cundall–Strack spring drags
+//!   behind a sliding contact; a straight slide is never dragged.
 //!
 //! The mode and the anchor change only between steps (`sim::grip`), where a switching
 //! function ([`switch`]) says so: stick→slip when `|f_t|` reaches `μ N`, slip→stick when
-//! the point stops moving away from its anchor, a new slip anchor at a turn. A new stick
-//! anchor continues the force, so the force is continuous there; every switch depends only
-//! on the state, so an event-locating method keeps its order across them.
+//! the point stops moving away from its anchor, a dragged anchor (above). Every new anchor
+//! continues the force, so the force is continuous at each switch: a switch located a
+//! little earlier or later moves the run only a little, and since every switch depends
+//! only on the state, an event-locating method keeps its order across them.
 
 use nalgebra::Vector3;
 
 use super::Penalty;
 
-/// How far behind the point a slip's anchor is set, m: far enough that the friction's
-/// direction, the chord from the anchor, barely moves with the structure's vibrations.
-const TRAIL: f64 = 1.0;
-
-/// The cosine of the largest angle, 10°, between the sliding direction and the direction
-/// from the anchor (that of the friction) before the anchor moves onto the velocity: each
-/// turn is an event: a tumbling icosahedron took five times as many at 5°, a third as
-/// many at 15° (for half again the direction's error).
-const TURN: f64 = 0.984_807_753_012_208;
-
 /// How far past the Coulomb limit a stick may be, relative, before it slips: a stick just
 /// begun from a slip sits at the limit to round-off, and must not slip again at once.
 const STICK_SLACK: f64 = 1e-9;
+
+/// The sine of the angle (0.3°) between a slip's path and the friction's direction `ê`
+/// beyond which its anchor is dragged (once `2 L` behind): friction opposes a turning slide
+/// to within about this, at an event per trail or two of sliding.
+const LAG: f64 = 0.005;
 
 /// Speed toward the anchor, m/s, at which a slip ends (below round-off of any real speed).
 const SLIP_SLACK: f64 = 1e-12;
@@ -116,23 +115,30 @@ impl Touch<'_> {
 /// The contact force of a point held by `grip`, N. A sticking spring is not capped at
 /// `μ N` here: its switch to slip is located where it reaches the cap, and a cap inside the
 /// step would make the force a discontinuous sign of the tangential velocity wherever the
-/// spring is slack (which an implicit method's Newton iteration cannot solve).
+/// spring is slack (which an implicit method's Newton iteration cannot solve). A slip
+/// nearer its anchor than the trail `L` pulls less, `μ N |d| / L`: a slip never comes
+/// that near (it starts `L` away, moves away, and stops once it turns back), but a step's
+/// trial stages and an implicit method's iterates may, and must not meet the flip of `ê`.
 #[inline]
-pub fn force(law: &Penalty, touch: &Touch, grip: Grip) -> Vector3<f64> {
+pub fn force(law: &Penalty, touch: &Touch, grip: Grip, trail: f64) -> Vector3<f64> {
     let normal = touch.normal_force(law);
     let friction = match grip {
         Grip::Free => return law.force(touch.depth, touch.normal, touch.v),
         Grip::Stick(a) => touch.spring(law, &a),
-        Grip::Slip(a) => -touch.away(&a) * (law.friction * normal),
+        Grip::Slip(a) => {
+            let d = touch.tangential(&(touch.x - a));
+            -d * (law.friction * normal / d.norm().max(trail))
+        }
     };
     touch.normal * normal + friction
 }
 
 /// Positive while `grip` keeps its mode and anchor: `μ N − |f_t|` while it sticks; while it
 /// slips, the lesser of its two switching functions ([`slip_switches`]: it stops, or its
-/// path turns); `f64::MAX` when it is free.
+/// anchor is dragged, `trail` being the anchor's distance behind the point, m);
+/// `f64::MAX` when it is free.
 #[inline]
-pub fn switch(law: &Penalty, touch: &Touch, grip: Grip) -> f64 {
+pub fn switch(law: &Penalty, touch: &Touch, grip: Grip, trail: f64) -> f64 {
     match grip {
         Grip::Free => f64::MAX,
         Grip::Stick(a) => {
@@ -140,8 +146,9 @@ pub fn switch(law: &Penalty, touch: &Touch, grip: Grip) -> f64 {
             limit * (1.0 + STICK_SLACK) - touch.spring(law, &a).norm()
         }
         Grip::Slip(a) => {
-            let (stop, turn) = slip_switches(law, touch, &a);
-            stop.min(turn)
+            let (stop, drag) = slip_switches(law, touch, &a, trail);
+            let speed = touch.tangential(touch.v).norm();
+            stop.min(drag * speed.max(SLIP_SLACK))
         }
     }
 }
@@ -150,16 +157,16 @@ pub fn switch(law: &Penalty, touch: &Touch, grip: Grip) -> f64 {
 /// A frictionless law never grips. `switched` says that the step was cut where this grip's
 /// switch changes sign: it switches then, whatever the sign at the step's end (which, a
 /// step's error away from the interpolant that located it, may still lie before it).
-pub fn next(law: &Penalty, touch: Option<&Touch>, grip: Grip, switched: bool) -> Grip {
+pub fn next(law: &Penalty, touch: Option<&Touch>, grip: Grip, switched: bool, trail: f64) -> Grip {
     let Some(touch) = touch.filter(|t| t.depth > 0.0 && law.friction > 0.0) else {
         return Grip::Free;
     };
     let limit = law.friction * touch.normal_force(law);
     if let Grip::Free = grip {
         // Anchored where it first touched, unless it already slides harder than μ N holds.
-        return next(law, Some(touch), Grip::Stick(*touch.x), false);
+        return next(law, Some(touch), Grip::Stick(*touch.x), false, trail);
     }
-    if !switched && switch(law, touch, grip) > 0.0 {
+    if !switched && switch(law, touch, grip, trail) > 0.0 {
         return grip;
     }
     match grip {
@@ -169,12 +176,11 @@ pub fn next(law: &Penalty, touch: Option<&Touch>, grip: Grip, switched: bool) ->
             let f = touch.spring(law, &a);
             let m = f.norm();
             let away = if m > 0.0 { -f / m } else { touch.away(&a) };
-            Grip::Slip(touch.x - away * TRAIL)
+            Grip::Slip(touch.x - away * trail)
         }
-        // Turned: the anchor moves behind the point, onto its velocity.
-        Grip::Slip(a) if turned(law, touch, &a) => {
-            let v = touch.tangential(touch.v);
-            Grip::Slip(touch.x - v * (TRAIL / v.norm()))
+        // Dragged: the anchor moves up behind the point, the friction's direction kept.
+        Grip::Slip(a) if dragged(law, touch, &a, trail) => {
+            Grip::Slip(touch.x - touch.away(&a) * trail)
         }
         // Stopped: the new spring pulls as the sliding friction did,
         // `k P(x − a') = μ N ê − c v_t`.
@@ -186,22 +192,26 @@ pub fn next(law: &Penalty, touch: Option<&Touch>, grip: Grip, switched: bool) ->
 }
 
 /// A slip's two switching functions, positive while it slides on: `v_t·ê` (the speed away
-/// from the anchor; zero where it stops), and `v_t·ê − cos 10° |v_t| + (1 − cos 10°) v_s`
-/// (zero where the path has turned 10° from `ê`, once faster than the shape's slip velocity
-/// `v_s`: slower wobbles of a structure sliding off do not turn it).
-fn slip_switches(law: &Penalty, touch: &Touch, anchor: &Vector3<f64>) -> (f64, f64) {
+/// from the anchor; zero where it stops), and `max(2 − r / L, 1 − sin φ / sin φ₀)` (zero
+/// where the point is at least twice the trail `L` from its anchor, `r ≥ 2 L`, and its path
+/// has turned at least [`LAG`] from `ê`: its anchor is then dragged). A straight slide is
+/// never dragged; a turning one within `L` of sliding.
+fn slip_switches(law: &Penalty, touch: &Touch, anchor: &Vector3<f64>, trail: f64) -> (f64, f64) {
     let v = touch.tangential(touch.v);
-    let along = v.dot(&touch.away(anchor));
-    (
-        along + SLIP_SLACK,
-        along - TURN * v.norm() + (1.0 - TURN) * law.slip_velocity,
-    )
+    let away = touch.away(anchor);
+    let along = v.dot(&away);
+    let behind = touch.tangential(&(touch.x - anchor)).norm();
+    let lag = (v - away * along).norm() / v.norm().max(law.slip_velocity);
+    let drag = (2.0 - behind / trail).max(1.0 - lag / LAG);
+    (along + SLIP_SLACK, drag)
 }
 
-/// Whether a slip's switch fired because the path turned, not because it stopped.
-fn turned(law: &Penalty, touch: &Touch, anchor: &Vector3<f64>) -> bool {
-    let (stop, turn) = slip_switches(law, touch, anchor);
-    turn < stop && touch.tangential(touch.v).norm() > 0.0
+/// Whether a slip's switch fired because its anchor is dragged, not because it stopped:
+/// the drag switch is near its zero (it is 1 or more a step after a drag, and at any speed
+/// below the shape's slip velocity) while the point still moves away from its anchor.
+fn dragged(law: &Penalty, touch: &Touch, anchor: &Vector3<f64>, trail: f64) -> bool {
+    let (stop, drag) = slip_switches(law, touch, anchor, trail);
+    stop > 0.0 && drag < 0.5
 }
 
 /// Energy in a sticking spring, `½ k |P(x − a)|²`, J.

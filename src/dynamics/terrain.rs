@@ -41,7 +41,7 @@ pub fn shape_forces(
                     x: x[i],
                     v: v[i],
                 };
-                grip::force(law, &touch, grips[2 * k + i])
+                grip::force(law, &touch, grips[2 * k + i], terrain.trail)
             }
             _ => law.force(c.depth, &c.normal, &(v[0] + (v[1] - v[0]) * c.s)),
         };

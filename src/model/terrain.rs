@@ -29,6 +29,10 @@ pub struct Terrain {
     /// How far beyond touching a capsule is watched, m: contacts farther away are skipped
     /// until a node has moved half of it ([`crate::contact::Proximity`]).
     pub margin: f64,
+    /// How far a slip's anchor trails its point, m ([`crate::contact::grip`]): a
+    /// ten-thousandth of the mean bar (a five-hundredth of the margin), 0.1 mm for
+    /// metre-long bars. The friction's direction follows a turning slide within a few.
+    pub trail: f64,
 }
 
 impl Terrain {
@@ -55,6 +59,7 @@ impl Terrain {
             capsules,
             sticks,
             margin,
+            trail: margin / 500.0,
         }
     }
 

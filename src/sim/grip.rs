@@ -103,7 +103,7 @@ pub(super) fn value(
     }
     let law = &terrain.shapes[s.shape].1;
     touching(s, terrain, (x, v), false, |t| {
-        t.map_or(f64::MAX, |t| grip::switch(law, t, grip))
+        t.map_or(f64::MAX, |t| grip::switch(law, t, grip, terrain.trail))
     })
 }
 
@@ -158,7 +158,7 @@ impl Simulation {
                 Grip::Free
             } else {
                 touching(s, terrain, (&x, &v), onset == Some(true), |t| {
-                    grip::next(law, t, *grip, switched)
+                    grip::next(law, t, *grip, switched, terrain.trail)
                 })
             };
             moved |= next != *grip;

@@ -9,7 +9,7 @@ use nalgebra::Vector3;
 
 use super::super::grip::{self, Cut, GripSwitch};
 use super::super::locate::crossing;
-use super::{Events, CUT_TIE, EDGE};
+use super::{Events, CUT_TIE, EDGE, GRIP_START};
 use crate::contact::Grip;
 use crate::dynamics::Inputs;
 use crate::model::Model;
@@ -74,15 +74,16 @@ impl Events {
             self.a0[s.end] = model.coords.end_vector(s.end, &self.acc0, false);
             self.a1[s.end] = model.coords.end_vector(s.end, &self.acc1, false);
         }
-        let (lo, hi) = (EDGE * h, (1.0 - EDGE) * h);
+        let hi = (1.0 - EDGE) * h;
         for (j, s) in self.grips.iter().enumerate() {
             if !self.grip0[j] || self.grip1[j] {
                 continue;
             }
             let g = |theta: f64| self.grip_along(s, inputs, theta, h);
             let theta = crossing(g, g(0.0), g(h), h);
+            let theta = theta.max(GRIP_START * h);
             self.crossed.push((Cut::Grip(j), theta));
-            if theta > lo && theta < hi && earliest.is_none_or(|e| theta < e) {
+            if theta < hi && earliest.is_none_or(|e| theta < e) {
                 earliest = Some(theta);
             }
         }

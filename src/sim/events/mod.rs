@@ -39,6 +39,11 @@ pub const MAX_SPLITS: u32 = 8;
 /// ground would otherwise be chased into ever shorter steps.
 const EDGE: f64 = 1e-3;
 
+/// The shortest cut at a grip's switch, as a fraction of the step. A grip changes its mode
+/// where its switch crosses, even just after the start: left to the step's end, it would
+/// change a whole step late.
+const GRIP_START: f64 = 1e-6;
+
 /// A point a switching function watches.
 #[derive(Debug, Clone, Copy, PartialEq)]
 enum Point {
@@ -226,16 +231,17 @@ impl Events {
             near_grips: Vec::with_capacity(grips.len()),
             terrain: model.terrain.clone().filter(|_| !grips.is_empty()),
             grip0: vec![false; grips.len()],
-            grips1: Vec::new(),
+            grips1: Vec::with_capacity(grips.len()),
             grip1: vec![false; grips.len()],
             grips_changed: false,
             acc0: vec![0.0; if grips.is_empty() { 0 } else { n / 2 }],
             acc1: vec![0.0; if grips.is_empty() { 0 } else { n / 2 }],
             a0: vec![Vector3::zeros(); if grips.is_empty() { 0 } else { ends }],
             a1: vec![Vector3::zeros(); if grips.is_empty() { 0 } else { ends }],
+            // Each switch and grip is crossed, and cut at, once per step at most.
+            crossed: Vec::with_capacity(switches.len() + grips.len()),
+            cuts: Vec::with_capacity(switches.len() + grips.len()),
             grips,
-            crossed: Vec::new(),
-            cuts: Vec::new(),
             positive0: vec![false; switches.len()],
             positive1: vec![false; switches.len()],
             switches,
