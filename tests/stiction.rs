@@ -159,7 +159,7 @@ fn a_sliding_bar_turned_by_a_sideways_load_follows_coulomb_and_stops() {
     // its axis: its velocity turns toward the load while friction brings it to rest, and
     // there, with 6 N < μ m g, it holds. Friction must turn with the velocity: the slip
     // anchors trail the ends by 0.1 mm (a ten-thousandth of the bar), and the bar must stop
-    // within ten trails of Coulomb's point (the old 10° re-anchoring missed by 2.1 mm).
+    // within ten trails of Coulomb's point.
     let (m, mu, f, k, r) = (2.0, 0.5, 6.0, 1e5, 0.02);
     let z = r - G / k;
     let text = format!(

@@ -28,7 +28,7 @@ use super::Penalty;
 /// begun from a slip sits at the limit to round-off, and must not slip again at once.
 const STICK_SLACK: f64 = 1e-9;
 
-/// The sine of the angle (0.3°) between a slip's path and the friction's direction `ê`
+/// The sine of the angle (about 0.3°) between a slip's path and the friction's direction `ê`
 /// beyond which its anchor is dragged (once `2 L` behind): friction opposes a turning slide
 /// to within about this, at an event per trail or two of sliding.
 const LAG: f64 = 0.005;
@@ -100,6 +100,15 @@ impl Touch<'_> {
             + self.tangential(self.v) * law.damping)
     }
 
+    /// The direction a slip is pulled back along, from its anchor to the point, shortened
+    /// within the trail: `d / max(|d|, L)`, `d = P(x − a)`. A slip starts `L` from its
+    /// anchor and moves away, but a step's trial stages or an implicit method's iterates may
+    /// come nearer, and must not meet a flip of the direction there.
+    fn pulled(&self, anchor: &Vector3<f64>, trail: f64) -> Vector3<f64> {
+        let d = self.tangential(&(self.x - anchor));
+        d / d.norm().max(trail)
+    }
+
     /// The unit tangential direction from `anchor` to the point (zero if there is none).
     fn away(&self, anchor: &Vector3<f64>) -> Vector3<f64> {
         let d = self.tangential(&(self.x - anchor));
@@ -112,31 +121,24 @@ impl Touch<'_> {
     }
 }
 
-/// The contact force of a point held by `grip`, N. A sticking spring is not capped at
-/// `μ N` here: its switch to slip is located where it reaches the cap, and a cap inside the
-/// step would make the force a discontinuous sign of the tangential velocity wherever the
-/// spring is slack (which an implicit method's Newton iteration cannot solve). A slip
-/// nearer its anchor than the trail `L` pulls less, `μ N |d| / L`: a slip never comes
-/// that near (it starts `L` away, moves away, and stops once it turns back), but a step's
-/// trial stages and an implicit method's iterates may, and must not meet the flip of `ê`.
+/// The contact force of a point held by `grip`, N, slips trailing by `trail`, m. A sticking spring is not capped at `μ N` here: its switch to slip is located
+/// where it reaches the cap, and a cap inside the step would make the force a discontinuous
+/// sign of the tangential velocity wherever the spring is slack (which an implicit method's
+/// Newton iteration cannot solve).
 #[inline]
 pub fn force(law: &Penalty, touch: &Touch, grip: Grip, trail: f64) -> Vector3<f64> {
     let normal = touch.normal_force(law);
     let friction = match grip {
         Grip::Free => return law.force(touch.depth, touch.normal, touch.v),
         Grip::Stick(a) => touch.spring(law, &a),
-        Grip::Slip(a) => {
-            let d = touch.tangential(&(touch.x - a));
-            -d * (law.friction * normal / d.norm().max(trail))
-        }
+        Grip::Slip(a) => -touch.pulled(&a, trail) * (law.friction * normal),
     };
     touch.normal * normal + friction
 }
 
 /// Positive while `grip` keeps its mode and anchor: `μ N − |f_t|` while it sticks; while it
 /// slips, the lesser of its two switching functions ([`slip_switches`]: it stops, or its
-/// anchor is dragged, `trail` being the anchor's distance behind the point, m);
-/// `f64::MAX` when it is free.
+/// anchor is dragged, slips trailing by `trail`, m); `f64::MAX` when it is free.
 #[inline]
 pub fn switch(law: &Penalty, touch: &Touch, grip: Grip, trail: f64) -> f64 {
     match grip {
@@ -146,8 +148,8 @@ pub fn switch(law: &Penalty, touch: &Touch, grip: Grip, trail: f64) -> f64 {
             limit * (1.0 + STICK_SLACK) - touch.spring(law, &a).norm()
         }
         Grip::Slip(a) => {
-            let (stop, drag) = slip_switches(law, touch, &a, trail);
-            let speed = touch.tangential(touch.v).norm();
+            // Both in m/s, so that the root finder's secant sees one scale.
+            let (stop, drag, speed) = slip_switches(law, touch, &a, trail);
             stop.min(drag * speed.max(SLIP_SLACK))
         }
     }
@@ -185,33 +187,41 @@ pub fn next(law: &Penalty, touch: Option<&Touch>, grip: Grip, switched: bool, tr
         // Stopped: the new spring pulls as the sliding friction did,
         // `k P(x − a') = μ N ê − c v_t`.
         Grip::Slip(a) => {
-            let pull = touch.away(&a) * limit - touch.tangential(touch.v) * law.damping;
+            let pulled = touch.pulled(&a, trail);
+            let pull = pulled * limit - touch.tangential(touch.v) * law.damping;
             Grip::Stick(touch.x - pull / law.stiffness)
         }
     }
 }
 
-/// A slip's two switching functions, positive while it slides on: `v_t·ê` (the speed away
-/// from the anchor; zero where it stops), and `max(2 − r / L, 1 − sin φ / sin φ₀)` (zero
-/// where the point is at least twice the trail `L` from its anchor, `r ≥ 2 L`, and its path
-/// has turned at least [`LAG`] from `ê`: its anchor is then dragged). A straight slide is
-/// never dragged; a turning one within `L` of sliding.
-fn slip_switches(law: &Penalty, touch: &Touch, anchor: &Vector3<f64>, trail: f64) -> (f64, f64) {
+/// A slip's two switching functions, positive while it slides on, and its speed: `v_t·ê`
+/// (the speed away from the anchor; zero where it stops), and `max(2 − r / L, 1 − s / s₀)`
+/// (zero where the point is at least twice its trail `L` from the anchor and its path has
+/// turned from `ê` by `s = |v_t − (v_t·ê) ê| / max(|v_t|, v_s) ≥ s₀` ([`LAG`], `v_s` the
+/// shape's slip velocity): its anchor is then dragged). A straight slide is never dragged.
+fn slip_switches(
+    law: &Penalty,
+    touch: &Touch,
+    anchor: &Vector3<f64>,
+    trail: f64,
+) -> (f64, f64, f64) {
     let v = touch.tangential(touch.v);
     let away = touch.away(anchor);
     let along = v.dot(&away);
     let behind = touch.tangential(&(touch.x - anchor)).norm();
-    let lag = (v - away * along).norm() / v.norm().max(law.slip_velocity);
+    let speed = v.norm();
+    let lag = (v - away * along).norm() / speed.max(law.slip_velocity);
     let drag = (2.0 - behind / trail).max(1.0 - lag / LAG);
-    (along + SLIP_SLACK, drag)
+    (along + SLIP_SLACK, drag, speed)
 }
 
 /// Whether a slip's switch fired because its anchor is dragged, not because it stopped:
-/// the drag switch is near its zero (it is 1 or more a step after a drag, and at any speed
-/// below the shape's slip velocity) while the point still moves away from its anchor.
+/// the point still moves away from its anchor, and the drag switch is the nearer its zero
+/// and well inside the range it falls through (from 1 at a drag to 0 an `L` later; a slip
+/// slowing to a stop in a straight line keeps it at 1).
 fn dragged(law: &Penalty, touch: &Touch, anchor: &Vector3<f64>, trail: f64) -> bool {
-    let (stop, drag) = slip_switches(law, touch, anchor, trail);
-    stop > 0.0 && drag < 0.5
+    let (stop, drag, speed) = slip_switches(law, touch, anchor, trail);
+    stop > 0.0 && drag < 0.5 && drag * speed.max(SLIP_SLACK) < stop
 }
 
 /// Energy in a sticking spring, `½ k |P(x − a)|²`, J.

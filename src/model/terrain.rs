@@ -30,8 +30,8 @@ pub struct Terrain {
     /// until a node has moved half of it ([`crate::contact::Proximity`]).
     pub margin: f64,
     /// How far a slip's anchor trails its point, m ([`crate::contact::grip`]): a
-    /// ten-thousandth of the mean bar (a five-hundredth of the margin), 0.1 mm for
-    /// metre-long bars. The friction's direction follows a turning slide within a few.
+    /// five-hundredth of the margin (a ten-thousandth of the mean bar unless a radius is
+    /// wider), 0.1 mm for metre-long bars: friction follows a turning slide within a few.
     pub trail: f64,
 }
 

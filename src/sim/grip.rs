@@ -186,8 +186,14 @@ impl Simulation {
         dynamics::accelerations(&self.model, &self.inputs, t, q0, v0, &mut self.ws, acc0);
         let (q1, v1) = self.state.y.split_at(half);
         dynamics::accelerations(&self.model, &self.inputs, t + h, q1, v1, &mut self.ws, acc1);
-        self.events
-            .locate_grips(&self.model, &self.inputs, h, earliest)
+        let earliest = self
+            .events
+            .locate_grips(&self.model, &self.inputs, h, earliest);
+        // No cut shorter than a step may be (the time must move: `StepSizeUnderflow`).
+        let shortest = 1e-13 * t.abs().max(1.0);
+        earliest
+            .map(|theta| theta.max(shortest))
+            .filter(|&theta| theta < h)
     }
 
     /// The friction grips (`Inputs::grip`).

@@ -80,8 +80,7 @@ impl Events {
                 continue;
             }
             let g = |theta: f64| self.grip_along(s, inputs, theta, h);
-            let theta = crossing(g, g(0.0), g(h), h);
-            let theta = theta.max(GRIP_START * h);
+            let theta = crossing(g, g(0.0), g(h), h).max(GRIP_START * h);
             self.crossed.push((Cut::Grip(j), theta));
             if theta < hi && earliest.is_none_or(|e| theta < e) {
                 earliest = Some(theta);

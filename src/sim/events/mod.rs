@@ -33,10 +33,11 @@ const CUT_TIE: f64 = 1e-9;
 /// Most events split off one step; the rest of the step is then taken whole.
 pub const MAX_SPLITS: u32 = 8;
 
-/// Crossings closer than this fraction of the step to either end are not split off: the
-/// kink there costs little (its error grows with the square of that distance), a crossing
-/// just located lies this close to the start of the next part, and a node grazing the
-/// ground would otherwise be chased into ever shorter steps.
+/// Crossings closer than this fraction of the step to either end are not split off (but a
+/// grip's near the start, see [`GRIP_START`]): the kink there costs little (its error grows
+/// with the square of that distance), a crossing just located lies this close to the start
+/// of the next part, and a node grazing the ground would otherwise be chased into ever
+/// shorter steps.
 const EDGE: f64 = 1e-3;
 
 /// The shortest cut at a grip's switch, as a fraction of the step. A grip changes its mode
