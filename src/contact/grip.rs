@@ -121,10 +121,11 @@ impl Touch<'_> {
     }
 }
 
-/// The contact force of a point held by `grip`, N, slips trailing by `trail`, m. A sticking spring is not capped at `μ N` here: its switch to slip is located
-/// where it reaches the cap, and a cap inside the step would make the force a discontinuous
-/// sign of the tangential velocity wherever the spring is slack (which an implicit method's
-/// Newton iteration cannot solve).
+/// The contact force of a point held by `grip`, N, slips trailing by `trail`, m. A
+/// sticking spring is not capped at `μ N` here: its switch to slip is located where it
+/// reaches the cap, and a cap inside the step would make the force a discontinuous sign of
+/// the tangential velocity wherever the spring is slack (which an implicit method's Newton
+/// iteration cannot solve).
 #[inline]
 pub fn force(law: &Penalty, touch: &Touch, grip: Grip, trail: f64) -> Vector3<f64> {
     let normal = touch.normal_force(law);
@@ -206,9 +207,10 @@ fn slip_switches(
     trail: f64,
 ) -> (f64, f64, f64) {
     let v = touch.tangential(touch.v);
-    let away = touch.away(anchor);
+    let d = touch.tangential(&(touch.x - anchor));
+    let behind = d.norm();
+    let away = if behind > 0.0 { d / behind } else { d };
     let along = v.dot(&away);
-    let behind = touch.tangential(&(touch.x - anchor)).norm();
     let speed = v.norm();
     let lag = (v - away * along).norm() / speed.max(law.slip_velocity);
     let drag = (2.0 - behind / trail).max(1.0 - lag / LAG);
